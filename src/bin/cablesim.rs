@@ -1,0 +1,184 @@
+//! `cablesim`: runs scenario files (shared/SCENARIO.md, docs/scenario.md).
+//!
+//! ```text
+//! cablesim run FILE [--out DIR] [--plot] [--quiet]
+//! cablesim check FILE
+//! cablesim view FILE
+//! ```
+//! Exit status: 0 success, 2 invalid file (message with file:line:col),
+//! 3 the simulation diverged (the rows computed so far are still written),
+//! 1 anything else (I/O).
+
+use bevy_rapier_cable::output::Recorder;
+use bevy_rapier_cable::scenario;
+use bevy_rapier_cable::sim::{SimError, World};
+use clap::{Parser, Subcommand};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(name = "cablesim", version, about = "Run wire-rope scenario files (bevy_rapier_cable)")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate a scenario headless and write results.csv and summary.json.
+    Run {
+        /// Scenario file (TOML).
+        file: PathBuf,
+        /// Output directory (default: out/<file stem>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Also write plot.png (one panel per probe).
+        #[arg(long)]
+        plot: bool,
+        /// No progress bar and no summary paragraph.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Parse and validate a scenario file only.
+    Check {
+        /// Scenario file (TOML).
+        file: PathBuf,
+    },
+    /// Open a scenario in an interactive window.
+    View {
+        /// Scenario file (TOML).
+        file: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Check { file } => match load(&file) {
+            Ok((_, world)) => {
+                println!("{}: ok ({} cables, {} bodies, {} probes)", file.display(), world.cable_names().len(), world.scenario.bodies.len(), world.scenario.probes.len());
+                ExitCode::SUCCESS
+            }
+            Err(code) => code,
+        },
+        Command::View { file } => {
+            eprintln!("error: `cablesim view {}`: the interactive viewer is not built yet (rendering is a later issue); use `cablesim run`", file.display());
+            ExitCode::from(1)
+        }
+        Command::Run { file, out, plot, quiet } => run(&file, out, plot, quiet),
+    }
+}
+
+/// Loads and builds a scenario; on failure prints the error and returns exit status 2.
+fn load(file: &Path) -> Result<(scenario::Scenario, World), ExitCode> {
+    let sc = scenario::load(file).map_err(|e| {
+        eprintln!("{e}");
+        ExitCode::from(2)
+    })?;
+    let world = World::new(sc.clone()).map_err(|e| {
+        eprintln!("error: {e}");
+        ExitCode::from(if matches!(e, SimError::Diverged { .. }) { 3 } else { 2 })
+    })?;
+    Ok((sc, world))
+}
+
+fn run(file: &Path, out: Option<PathBuf>, plot: bool, quiet: bool) -> ExitCode {
+    let (sc, mut world) = match load(file) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scenario".into());
+    let dir = out.unwrap_or_else(|| PathBuf::from("out").join(stem));
+    if let Err(e) = std::fs::create_dir_all(&dir) {
+        eprintln!("error: cannot create {}: {e}", dir.display());
+        return ExitCode::from(1);
+    }
+    let sim = &sc.simulation;
+    let frames = (sim.duration / sim.dt - 1e-9).ceil().max(0.0) as u64;
+    let every = ((sim.output_interval / sim.dt).round() as u64).max(1);
+    let mut rec = Recorder::new(sc.columns());
+    let mut row = Vec::new();
+    let bar = progress_bar(frames, quiet);
+    let started = Instant::now();
+    world.sample(&mut row);
+    let mut failure = None;
+    if let Err(e) = rec.push_row(0.0, &row) {
+        eprintln!("error: {e}");
+        return ExitCode::from(1);
+    }
+    for k in 1..=frames {
+        if let Err(e) = world.step() {
+            failure = Some(e);
+            break;
+        }
+        if k % every == 0 || k == frames {
+            world.sample(&mut row);
+            if let Err(e) = rec.push_row(world.time, &row) {
+                eprintln!("error: {e}");
+                return ExitCode::from(1);
+            }
+        }
+        if let Some(b) = &bar {
+            b.set_position(k);
+        }
+    }
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let wall = started.elapsed().as_secs_f64();
+    let written = write_outputs(&rec, &dir, plot, world.steps, world.time, wall);
+    if let Err(e) = &written {
+        eprintln!("error: {e}");
+    }
+    if let Some(e) = failure {
+        eprintln!("error: simulation diverged: {e}\n       {} rows up to t = {} s written to {}", rec.len(), world.time, dir.display());
+        return ExitCode::from(3);
+    }
+    if written.is_err() {
+        return ExitCode::from(1);
+    }
+    if !quiet {
+        let (newton, _) = world.work();
+        let rtf = world.time / wall.max(1e-12);
+        println!(
+            "{}: simulated {:.3} s in {} frames of {} s ({} cable sub-step{} each, {}) in {:.3} s wall time: {:.1}× real time, {:.2} Newton iterations per cable step. Wrote {} rows of {} columns to {}{}.",
+            file.display(),
+            world.time,
+            world.steps,
+            sim.dt,
+            world.substeps,
+            if world.substeps == 1 { "" } else { "s" },
+            sim.integrator.name,
+            wall,
+            rtf,
+            newton as f64 / (world.steps.max(1) * world.substeps as u64 * world.cable_names().len().max(1) as u64) as f64,
+            rec.len(),
+            rec.columns().len() + 1,
+            dir.join("results.csv").display(),
+            if plot { format!(", plot in {}", dir.join("plot.png").display()) } else { String::new() }
+        );
+    }
+    ExitCode::SUCCESS
+}
+
+fn write_outputs(rec: &Recorder, dir: &Path, plot: bool, steps: u64, simulated: f64, wall: f64) -> Result<(), bevy_rapier_cable::output::OutputError> {
+    rec.write_csv(&dir.join("results.csv"))?;
+    rec.write_summary(&dir.join("summary.json"), steps, simulated, wall)?;
+    if plot {
+        rec.write_plot(&dir.join("plot.png"), &rec.default_panels())?;
+    }
+    Ok(())
+}
+
+fn progress_bar(frames: u64, quiet: bool) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if quiet || !std::io::stdout().is_terminal() {
+        return None;
+    }
+    let b = indicatif::ProgressBar::new(frames);
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} frames {elapsed_precise} ETA {eta}") {
+        b.set_style(style);
+    }
+    Some(b)
+}

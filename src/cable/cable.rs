@@ -1,0 +1,214 @@
+//! [`Cable`]: a rope model with its integrator state, stepped in time, with
+//! the queries users read (node positions, tension, moments, energy).
+
+use super::rope::{RopeModel, ELEMENT_DOFS};
+use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
+use glam::DVec3;
+use thiserror::Error;
+
+/// Why a cable step failed.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum CableError {
+    /// The integrator failed (Newton, solve, explicit step limit).
+    #[error(transparent)]
+    Integrate(#[from] IntegrateError),
+    /// The state left physical sense (non-finite, or an element stretched
+    /// or compressed by more than its length).
+    #[error("cable diverged at t = {time} s: {reason}")]
+    Diverged {
+        /// Simulation time, s.
+        time: f64,
+        /// What went wrong.
+        reason: String,
+    },
+}
+
+/// A rope stepped in time.
+#[derive(Debug)]
+pub struct Cable {
+    /// The rope model (chain, layout, section).
+    pub model: RopeModel,
+    /// Integrator state `(t, q, v, a, â)`.
+    pub state: State,
+    /// The time integrator.
+    pub integrator: Integrator,
+    /// Work done by the last step.
+    pub last_stats: StepStats,
+    /// Work done by all steps so far.
+    pub total_stats: StepStats,
+    /// Steps taken.
+    pub steps: u64,
+}
+
+/// Internal forces of one element joint, in the element frame (x = axis).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ElementForces {
+    /// Axial force (tension positive), N.
+    pub tension: f64,
+    /// Shear forces along local y and z, N.
+    pub shear: [f64; 2],
+    /// Bending moments about local z and y, N·m.
+    pub bending: [f64; 2],
+    /// Torsion moment, N·m.
+    pub torsion: f64,
+}
+
+impl Cable {
+    /// Starts a cable at rest in its built configuration at time 0.
+    pub fn new(model: RopeModel, scheme: Scheme) -> Result<Self, CableError> {
+        let mut model = model;
+        let n = model.q0.len();
+        let state = State::new(&mut model.chain, 0.0, model.q0.clone(), vec![0.0; n])?;
+        let mut c = Cable {
+            model,
+            state,
+            integrator: Integrator::new(scheme),
+            last_stats: StepStats::default(),
+            total_stats: StepStats::default(),
+            steps: 0,
+        };
+        c.refresh();
+        Ok(c)
+    }
+
+    /// Advances the cable by `h` seconds. On error the state is left at the
+    /// start of the step.
+    pub fn step(&mut self, h: f64) -> Result<StepStats, CableError> {
+        let stats = self.integrator.step(&mut self.model.chain, &mut self.state, h)?;
+        self.last_stats = stats;
+        self.total_stats += stats;
+        self.steps += 1;
+        self.refresh();
+        self.check_sanity()?;
+        Ok(stats)
+    }
+
+    /// Re-evaluates kinematics and loads at the current state (queries read
+    /// them). Called by [`Cable::step`].
+    pub fn refresh(&mut self) {
+        let n = self.state.q.len();
+        let mut r = vec![0.0; n];
+        let s = &self.state;
+        // A failure here means a non-finite state, caught by check_sanity.
+        let _ = self.model.chain.residual_into(s.t, &s.q, &s.v, &s.a, &mut r);
+    }
+
+    fn check_sanity(&self) -> Result<(), CableError> {
+        let l = &self.model.layout;
+        if !self.state.is_finite() {
+            return Err(CableError::Diverged { time: self.state.t, reason: "non-finite state".into() });
+        }
+        for i in 0..l.elements {
+            let gap = self.state.q[l.dof(i, 3)];
+            if gap.abs() > l.element_length {
+                return Err(CableError::Diverged {
+                    time: self.state.t,
+                    reason: format!("element {i} strained by {:.1} % (beyond any physical sense)", 100.0 * gap / l.element_length),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Simulation time, s.
+    pub fn time(&self) -> f64 {
+        self.state.t
+    }
+
+    /// World positions of the `N + 1` nodes, m.
+    pub fn nodes(&self) -> Vec<DVec3> {
+        self.model.nodes()
+    }
+
+    /// World velocities of the `N + 1` nodes, m/s.
+    pub fn node_velocities(&self) -> Vec<DVec3> {
+        let l = &self.model.layout;
+        let ch = &self.model.chain;
+        let mut out: Vec<DVec3> = (0..l.elements)
+            .map(|i| {
+                let s = l.dof(i, 0);
+                let fr = &ch.frames[s];
+                fr.vel.bot + fr.vel.top.cross(fr.joint_point)
+            })
+            .collect();
+        out.push(ch.link_point_velocity(l.element_link(l.elements - 1), DVec3::new(l.element_length, 0.0, 0.0)));
+        out
+    }
+
+    /// Position and velocity of the rope at arc length `s` (m, along the
+    /// unstretched rope from the start), interpolated between nodes.
+    pub fn point_at(&self, s: f64) -> (DVec3, DVec3) {
+        let (i, f) = self.locate(s);
+        let (p, v) = (self.nodes(), self.node_velocities());
+        (p[i].lerp(p[i + 1], f), v[i].lerp(v[i + 1], f))
+    }
+
+    fn locate(&self, s: f64) -> (usize, f64) {
+        let l = &self.model.layout;
+        let x = (s / l.element_length).clamp(0.0, l.elements as f64);
+        let i = (x.floor() as usize).min(l.elements - 1);
+        (i, x - i as f64)
+    }
+
+    /// Internal forces of element joint `i` (between element `i − 1` and
+    /// `i`; joint 0 holds the start).
+    pub fn element_forces(&self, i: usize) -> ElementForces {
+        let l = &self.model.layout;
+        let f = |k: usize| {
+            let s = l.dof(i, k);
+            let j = &self.model.chain.joints[s];
+            j.stiffness * (self.state.q[s] - j.rest) + j.damping * self.state.v[s]
+        };
+        ElementForces { tension: f(3), shear: [f(4), f(5)], bending: [f(0), f(1)], torsion: f(2) }
+    }
+
+    /// Axial tension (N) at arc length `s` (m): the force of the element
+    /// joint nearest to `s`.
+    pub fn tension_at(&self, s: f64) -> f64 {
+        let (i, f) = self.locate(s);
+        let i = if f > 0.5 { (i + 1).min(self.model.layout.elements - 1) } else { i };
+        self.element_forces(i).tension
+    }
+
+    /// Current stretched length (polyline through the nodes), m.
+    pub fn stretched_length(&self) -> f64 {
+        self.nodes().windows(2).map(|w| w[0].distance(w[1])).sum()
+    }
+
+    /// Kinetic energy of the rope and its lumped bodies, J.
+    pub fn kinetic_energy(&self) -> f64 {
+        self.model.chain.kinetic_energy()
+    }
+
+    /// Elastic energy (joint springs and end springs), J.
+    pub fn elastic_energy(&self) -> f64 {
+        let ch = &self.model.chain;
+        let mut e = ch.elastic_energy(&self.state.q);
+        for an in &ch.anchors {
+            let p = ch.link_point(an.link, an.local_point);
+            let (target, _) = (an.target)(self.state.t);
+            e += 0.5 * an.stiffness * p.distance_squared(target);
+        }
+        e
+    }
+
+    /// Gravitational potential energy (zero at y = 0 for gravity along −y), J.
+    pub fn gravity_energy(&self) -> f64 {
+        self.model.chain.gravity_energy()
+    }
+
+    /// Total mechanical energy: kinetic + gravitational + elastic, J.
+    pub fn energy(&self) -> f64 {
+        self.kinetic_energy() + self.gravity_energy() + self.elastic_energy()
+    }
+
+    /// Number of elements.
+    pub fn elements(&self) -> usize {
+        self.model.layout.elements
+    }
+
+    /// Coordinates per element (6).
+    pub const fn element_dofs() -> usize {
+        ELEMENT_DOFS
+    }
+}

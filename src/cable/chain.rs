@@ -1,0 +1,562 @@
+//! A serial chain of one-degree-of-freedom sub-joints with rigid links, in
+//! relative coordinates, and its O(n) residual and implicit tangent solve.
+//!
+//! This is the engine under every rope: an element's 6-DOF elastic joint is
+//! six ordered sub-joints (bending about local z and y, torsion about the
+//! element axis x, then axial and two shear slides), and lumped bodies
+//! (trolley, hook, payload) are links of the same chain.
+//!
+//! * [`Chain::residual_into`] is a recursive Newton–Euler pass: forward
+//!   kinematics (1)–(2) of REFERENCE §1, link velocities and accelerations,
+//!   then the d'Alembert loads `m(g − a)` swept from tip to base. It also
+//!   builds, in the same sweep, the symmetric 6×6 geometric-stiffness
+//!   blocks `B_s` with `K_g = Σ J_sᵀ B_s J_s` (DESIGN.md "Stable at the
+//!   frame step").
+//! * [`Chain::solve_into`] solves `(M + c_v C + c_q (K + K_g)) x = b` with an
+//!   articulated-body sweep in which link `s` carries `I_s + c_q B_s` and
+//!   joint `s` the armature `c_v c_s + c_q k_s`. No matrix of the chain's
+//!   size is ever formed: cost and memory are O(n).
+//!
+//! All spatial quantities are in the world frame about [`Chain::origin`].
+
+use super::spatial::{skew, M6, V6};
+use crate::integrate::{SecondOrderSystem, SystemError};
+use glam::{DMat3, DQuat, DVec3};
+use std::sync::Arc;
+
+/// Revolute or prismatic one-DOF joint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointKind {
+    /// Rotation about the axis, rad.
+    Revolute,
+    /// Translation along the axis, m.
+    Prismatic,
+}
+
+/// Mass properties of a link, in the link's own frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinkMass {
+    /// Mass, kg.
+    pub mass: f64,
+    /// Centre of mass in the link frame, m.
+    pub com: DVec3,
+    /// Rotational inertia about the centre of mass, in the link frame, kg·m².
+    pub inertia: DMat3,
+}
+
+impl LinkMass {
+    /// Combines two sets of mass properties given in the same frame.
+    pub fn combine(&self, o: &LinkMass) -> LinkMass {
+        let m = self.mass + o.mass;
+        let com = (self.com * self.mass + o.com * o.mass) / m;
+        let shift = |lm: &LinkMass| {
+            let d = lm.com - com;
+            lm.inertia + (DMat3::from_diagonal(DVec3::splat(d.length_squared())) - super::spatial::outer3(d, d)) * lm.mass
+        };
+        LinkMass { mass: m, com, inertia: shift(self) + shift(o) }
+    }
+}
+
+/// One sub-joint and the link that follows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SubJoint {
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// Unit axis in the joint frame.
+    pub axis: DVec3,
+    /// Joint point in the parent link frame, m.
+    pub offset: DVec3,
+    /// Constant rotation from the parent link frame to the joint frame.
+    pub pre_rotation: DMat3,
+    /// Spring stiffness, N/m or N·m/rad.
+    pub stiffness: f64,
+    /// Viscous damping, N·s/m or N·m·s/rad.
+    pub damping: f64,
+    /// Spring rest value, m or rad.
+    pub rest: f64,
+    /// Mass of the link after this joint; `None` for a massless sub-link.
+    pub link: Option<LinkMass>,
+}
+
+/// Pose, velocity and acceleration of the chain's base frame at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BaseState {
+    /// Orientation of the base frame.
+    pub rotation: DMat3,
+    /// Position of the base frame origin (world), m.
+    pub position: DVec3,
+    /// Angular velocity, rad/s.
+    pub angular_velocity: DVec3,
+    /// Velocity of the base origin, m/s.
+    pub velocity: DVec3,
+    /// Angular acceleration, rad/s².
+    pub angular_acceleration: DVec3,
+    /// Acceleration of the base origin, m/s².
+    pub acceleration: DVec3,
+}
+
+impl BaseState {
+    /// A base at rest with the given pose.
+    pub fn fixed(rotation: DMat3, position: DVec3) -> Self {
+        BaseState {
+            rotation,
+            position,
+            angular_velocity: DVec3::ZERO,
+            velocity: DVec3::ZERO,
+            angular_acceleration: DVec3::ZERO,
+            acceleration: DVec3::ZERO,
+        }
+    }
+}
+
+/// How the base frame moves: fixed, or a prescribed function of time.
+#[derive(Clone)]
+pub enum BaseMotion {
+    /// At rest.
+    Fixed(BaseState),
+    /// Prescribed motion `t ↦ state` (kinematic body, moving crane hook…).
+    Prescribed(Arc<dyn Fn(f64) -> BaseState + Send + Sync>),
+}
+
+impl BaseMotion {
+    /// The base state at time `t`, s.
+    pub fn at(&self, t: f64) -> BaseState {
+        match self {
+            BaseMotion::Fixed(s) => *s,
+            BaseMotion::Prescribed(f) => f(t),
+        }
+    }
+}
+
+impl std::fmt::Debug for BaseMotion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BaseMotion::Fixed(s) => f.debug_tuple("Fixed").field(s).finish(),
+            BaseMotion::Prescribed(_) => f.write_str("Prescribed(..)"),
+        }
+    }
+}
+
+/// A spring–damper holding a point of a link to a (possibly moving) world
+/// point, optionally also holding the link's orientation. Implicit: its
+/// stiffness enters the articulated-body solve.
+#[derive(Clone)]
+pub struct AnchorSpring {
+    /// Sub-joint index whose link is held.
+    pub link: usize,
+    /// Held point in the link frame, m.
+    pub local_point: DVec3,
+    /// Target world point (and its velocity) as a function of time.
+    pub target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>,
+    /// Translational stiffness, N/m.
+    pub stiffness: f64,
+    /// Translational damping, N·s/m.
+    pub damping: f64,
+    /// Optional orientation hold: target orientation, stiffness N·m/rad,
+    /// damping N·m·s/rad.
+    pub rotation: Option<(DMat3, f64, f64)>,
+}
+
+/// An external load on a link: a force of fixed direction at a point plus a
+/// moment, world frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LinkLoad {
+    /// Sub-joint index whose link carries the load.
+    pub link: usize,
+    /// Force, N.
+    pub force: DVec3,
+    /// Application point in the link frame, m.
+    pub local_point: DVec3,
+    /// Moment, N·m.
+    pub moment: DVec3,
+}
+
+/// Per sub-joint scratch, rebuilt by every residual evaluation.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Frame {
+    /// Link orientation.
+    pub rot: DMat3,
+    /// Link origin (relative to the chain origin).
+    pub pos: DVec3,
+    /// Joint point (relative to the chain origin).
+    pub joint_point: DVec3,
+    /// Motion subspace.
+    pub s: V6,
+    /// Link spatial velocity.
+    pub vel: V6,
+    /// Link spatial acceleration.
+    pub acc: V6,
+    /// Composite load on this link and everything outboard (spatial force).
+    pub fc: V6,
+    /// Link spatial inertia (zero for massless links).
+    pub inertia: M6,
+    /// Geometric stiffness block `B_s`.
+    pub b: M6,
+    /// Anchor-spring stiffness and damping on this link (spatial, world).
+    pub k_anchor: M6,
+    /// Anchor-spring damping.
+    pub c_anchor: M6,
+    /// Loads on this link alone (spatial force).
+    pub lf: V6,
+    /// Load tangent `Σ B̃` of this link's loads.
+    pub lh: M6,
+    /// ABA scratch: `U = I^A S`, `D`, `u`.
+    pub u_vec: V6,
+    pub d: f64,
+    pub u: f64,
+}
+
+/// A serial chain of one-DOF sub-joints (see the module docs).
+#[derive(Clone)]
+pub struct Chain {
+    /// The sub-joints from base to tip.
+    pub joints: Vec<SubJoint>,
+    /// Base motion.
+    pub base: BaseMotion,
+    /// Gravity, m/s².
+    pub gravity: DVec3,
+    /// Reference point: internal positions are relative to it (keeps the
+    /// spatial inertias well scaled far from the world origin), m.
+    pub origin: DVec3,
+    /// Anchor springs (implicit).
+    pub anchors: Vec<AnchorSpring>,
+    /// External loads of fixed direction (explicit in value, their geometric
+    /// stiffness implicit).
+    pub loads: Vec<LinkLoad>,
+    /// Generalized forces on the sub-joints (drives), N or N·m.
+    pub joint_forces: Vec<f64>,
+    /// Upper estimate of the highest natural frequency, rad/s (for explicit
+    /// schemes' sub-steps); `None` if unknown.
+    pub max_frequency: Option<f64>,
+    pub(crate) frames: Vec<Frame>,
+}
+
+impl std::fmt::Debug for Chain {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Chain").field("joints", &self.joints.len()).field("base", &self.base).finish()
+    }
+}
+
+impl Chain {
+    /// A chain with the given sub-joints and base.
+    pub fn new(joints: Vec<SubJoint>, base: BaseMotion, gravity: DVec3, origin: DVec3) -> Self {
+        let n = joints.len();
+        Chain {
+            joints,
+            base,
+            gravity,
+            origin,
+            anchors: Vec::new(),
+            loads: Vec::new(),
+            joint_forces: vec![0.0; n],
+            max_frequency: None,
+            frames: vec![Frame::default(); n],
+        }
+    }
+
+    /// Number of sub-joints (= generalized coordinates).
+    pub fn len(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Whether the chain has no sub-joints.
+    pub fn is_empty(&self) -> bool {
+        self.joints.is_empty()
+    }
+
+    /// Forward kinematics and velocities/accelerations only (no loads).
+    pub(crate) fn kinematics(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64]) {
+        let base = self.base.at(t);
+        let bp = base.position - self.origin;
+        let bw = base.angular_velocity;
+        // Spatial velocity/acceleration of the base, at the reference point.
+        let mut prev_vel = V6::new(bw, base.velocity - bw.cross(bp));
+        let mut prev_acc =
+            V6::new(base.angular_acceleration, base.acceleration - base.angular_acceleration.cross(bp) - bw.cross(base.velocity));
+        let mut prev_rot = base.rotation;
+        let mut prev_pos = bp;
+        for (s, j) in self.joints.iter().enumerate() {
+            let fr = &mut self.frames[s];
+            let rj = prev_rot * j.pre_rotation;
+            let pj = prev_pos + prev_rot * j.offset;
+            let aw = rj * j.axis;
+            let (sv, rot, pos) = match j.kind {
+                JointKind::Revolute => (V6::new(aw, pj.cross(aw)), rj * DMat3::from_axis_angle(j.axis, q[s]), pj),
+                JointKind::Prismatic => (V6::new(DVec3::ZERO, aw), rj, pj + aw * q[s]),
+            };
+            let vel = prev_vel + sv * v[s];
+            let acc = prev_acc + prev_vel.cross_motion(sv) * v[s] + sv * a[s];
+            fr.rot = rot;
+            fr.pos = pos;
+            fr.joint_point = pj;
+            fr.s = sv;
+            fr.vel = vel;
+            fr.acc = acc;
+            prev_vel = vel;
+            prev_acc = acc;
+            prev_rot = rot;
+            prev_pos = pos;
+        }
+    }
+
+    /// World position of a point given in the frame of link `s` (after the
+    /// last kinematics evaluation), m.
+    pub fn link_point(&self, s: usize, local: DVec3) -> DVec3 {
+        let fr = &self.frames[s];
+        fr.pos + fr.rot * local + self.origin
+    }
+
+    /// World velocity of a point given in the frame of link `s`, m/s.
+    pub fn link_point_velocity(&self, s: usize, local: DVec3) -> DVec3 {
+        let fr = &self.frames[s];
+        let p = fr.pos + fr.rot * local;
+        fr.vel.bot + fr.vel.top.cross(p)
+    }
+
+    /// Orientation of link `s` (after the last kinematics evaluation).
+    pub fn link_rotation(&self, s: usize) -> DMat3 {
+        self.frames[s].rot
+    }
+
+    /// Spatial velocity of link `s` (about the chain origin).
+    pub fn link_velocity(&self, s: usize) -> V6 {
+        self.frames[s].vel
+    }
+
+    /// Joint point of sub-joint `s` in the world, m.
+    pub fn joint_point(&self, s: usize) -> DVec3 {
+        self.frames[s].joint_point + self.origin
+    }
+
+    /// Residual `r = M(q) a − Q(t, q, v)` (see [`SecondOrderSystem`]); also
+    /// prepares everything [`Chain::solve_into`] needs at this state.
+    pub fn residual_into(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError> {
+        if let Some(index) = q.iter().chain(v).chain(a).position(|x| !x.is_finite()) {
+            return Err(SystemError::NonFinite { index: index % q.len().max(1) });
+        }
+        self.kinematics(t, q, v, a);
+        let n = self.joints.len();
+        // Loads per link: d'Alembert + gravity at the centre of mass.
+        for s in 0..n {
+            let fr = &mut self.frames[s];
+            fr.lf = V6::ZERO;
+            fr.lh = M6::ZERO;
+            fr.k_anchor = M6::ZERO;
+            fr.c_anchor = M6::ZERO;
+            fr.inertia = M6::ZERO;
+            if let Some(lm) = &self.joints[s].link {
+                let c = fr.pos + fr.rot * lm.com;
+                let ic = fr.rot * lm.inertia * fr.rot.transpose();
+                let w = fr.vel.top;
+                let vc = fr.vel.bot + w.cross(c);
+                let alpha = fr.acc.top;
+                let ac = fr.acc.bot + alpha.cross(c) + w.cross(vc);
+                let force = (self.gravity - ac) * lm.mass;
+                let moment = -(ic * alpha + w.cross(ic * w));
+                fr.lf += V6::new(c.cross(force) + moment, force);
+                fr.lh += M6::point_load_tangent(force, c);
+                fr.inertia = M6::inertia(lm.mass, c, ic);
+            }
+        }
+        for ld in &self.loads {
+            let fr = &mut self.frames[ld.link];
+            let p = fr.pos + fr.rot * ld.local_point;
+            fr.lf += V6::new(p.cross(ld.force) + ld.moment, ld.force);
+            fr.lh += M6::point_load_tangent(ld.force, p);
+        }
+        for an in &self.anchors {
+            let fr = &mut self.frames[an.link];
+            let p = fr.pos + fr.rot * an.local_point;
+            let pv = fr.vel.bot + fr.vel.top.cross(p);
+            let (target, target_v) = (an.target)(t);
+            let force = -(p - (target - self.origin)) * an.stiffness - (pv - target_v) * an.damping;
+            let mut moment = DVec3::ZERO;
+            let px = skew(p);
+            let k_point = M6 { a: px * px.transpose(), b: px, c: px.transpose(), d: DMat3::IDENTITY };
+            fr.k_anchor += k_point.scale(an.stiffness);
+            fr.c_anchor += k_point.scale(an.damping);
+            if let Some((rt, kr, cr)) = an.rotation {
+                let err = DQuat::from_mat3(&(fr.rot * rt.transpose())).to_scaled_axis();
+                moment = -err * kr - fr.vel.top * cr;
+                let rot_block = |k: f64| M6 { a: DMat3::from_diagonal(DVec3::splat(k)), b: DMat3::ZERO, c: DMat3::ZERO, d: DMat3::ZERO };
+                fr.k_anchor += rot_block(kr);
+                fr.c_anchor += rot_block(cr);
+            }
+            fr.lf += V6::new(p.cross(force) + moment, force);
+            fr.lh += M6::point_load_tangent(force, p);
+        }
+        // Tip-to-base sweep: composite loads, residual, geometric stiffness.
+        let mut fc = V6::ZERO;
+        let mut h = M6::ZERO;
+        let mut g_next = M6::ZERO;
+        for s in (0..n).rev() {
+            let j = &self.joints[s];
+            let fr = &mut self.frames[s];
+            fc += fr.lf;
+            h += fr.lh;
+            fr.fc = fc;
+            r[s] = -fr.s.dot(fc) + j.stiffness * (q[s] - j.rest) + j.damping * v[s] - self.joint_forces[s];
+            let av = M6::fbar(fc).mul_vec(fr.s);
+            let z = fr.s * (1.0 / fr.s.dot(fr.s));
+            let sym = (M6::outer(av, z) + M6::outer(z, av)).scale(0.5);
+            let g = (h + h.transpose()).scale(0.5) + sym;
+            fr.b = g_next - g;
+            g_next = g;
+        }
+        Ok(())
+    }
+
+    /// Solves `(M + c_v C + c_q (K + K_g)) x = b` at the state of the last
+    /// [`Chain::residual_into`] call, in O(n).
+    pub fn solve_into(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
+        let n = self.joints.len();
+        let mut carry_i = M6::ZERO;
+        let mut carry_p = V6::ZERO;
+        for s in (0..n).rev() {
+            let j = &self.joints[s];
+            let fr = &mut self.frames[s];
+            let ia = fr.inertia + (fr.b + fr.k_anchor).scale(c_q) + fr.c_anchor.scale(c_v) + carry_i;
+            let uv = ia.mul_vec(fr.s);
+            let armature = c_v * j.damping + c_q * j.stiffness;
+            let d = fr.s.dot(uv) + armature;
+            // The effective matrix may be indefinite (compression, large c_q);
+            // only a vanishing pivot is fatal.
+            if !d.is_finite() || d.abs() <= 1e-13 * (fr.inertia.max_abs() + armature.abs()) {
+                return Err(SystemError::Singular { index: s, pivot: d });
+            }
+            let u = b[s] - fr.s.dot(carry_p);
+            fr.u_vec = uv;
+            fr.d = d;
+            fr.u = u;
+            carry_i = ia - M6::outer(uv, uv).scale(1.0 / d);
+            carry_p = carry_p + uv * (u / d);
+        }
+        let mut acc = V6::ZERO;
+        for s in 0..n {
+            let fr = &self.frames[s];
+            let xs = (fr.u - fr.u_vec.dot(acc)) / fr.d;
+            x[s] = xs;
+            acc += fr.s * xs;
+        }
+        Ok(())
+    }
+
+    /// Kinetic energy at the last kinematics evaluation, J.
+    pub fn kinetic_energy(&self) -> f64 {
+        self.frames.iter().map(|fr| 0.5 * fr.vel.dot(fr.inertia.mul_vec(fr.vel))).sum()
+    }
+
+    /// Gravitational potential energy `−Σ m g·c` at the last kinematics
+    /// evaluation (zero at the world origin), J.
+    pub fn gravity_energy(&self) -> f64 {
+        self.joints
+            .iter()
+            .zip(&self.frames)
+            .filter_map(|(j, fr)| j.link.map(|lm| -lm.mass * self.gravity.dot(fr.pos + fr.rot * lm.com + self.origin)))
+            .sum()
+    }
+
+    /// Elastic energy of the joint springs at `q`, J.
+    pub fn elastic_energy(&self, q: &[f64]) -> f64 {
+        self.joints.iter().zip(q).map(|(j, qs)| 0.5 * j.stiffness * (qs - j.rest).powi(2)).sum()
+    }
+}
+
+impl SecondOrderSystem for Chain {
+    fn dof(&self) -> usize {
+        self.joints.len()
+    }
+    fn residual(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError> {
+        self.residual_into(t, q, v, a, r)
+    }
+    fn solve_tangent(
+        &mut self,
+        _t: f64,
+        _q: &[f64],
+        _v: &[f64],
+        _a: &[f64],
+        c_v: f64,
+        c_q: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<(), SystemError> {
+        self.solve_into(c_v, c_q, b, x)
+    }
+    fn max_frequency(&self, _q: &[f64]) -> Option<f64> {
+        self.max_frequency
+    }
+    fn position_tolerance(&self) -> f64 {
+        1e-11
+    }
+}
+
+/// Why a static solve failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StaticError {
+    /// The tangent solve failed.
+    #[error(transparent)]
+    System(#[from] SystemError),
+    /// No equilibrium found within the iteration limit.
+    #[error("no static equilibrium after {iterations} iterations (largest residual {residual:e})")]
+    NotConverged {
+        /// Iterations done.
+        iterations: usize,
+        /// Largest residual component left, N or N·m.
+        residual: f64,
+    },
+}
+
+impl Chain {
+    /// Finds the static equilibrium `r(t, q, 0, 0) = 0` from the starting
+    /// coordinates `q` (updated in place) by pseudo-transient continuation:
+    /// Newton steps `Δq = c (M + c K_t)⁻¹ (−r)` with the pseudo-time factor
+    /// `c` (s²) raised while the residual falls, so the last steps are full
+    /// Newton steps on the stiffness. Returns the iterations used.
+    ///
+    /// Converged when every coordinate correction is below `tol` (m or rad).
+    pub fn solve_static(&mut self, t: f64, q: &mut [f64], tol: f64, max_iterations: usize) -> Result<usize, StaticError> {
+        let n = self.len();
+        let zero = vec![0.0; n];
+        let mut r = vec![0.0; n];
+        let mut x = vec![0.0; n];
+        let mut c: f64 = 1e-2;
+        let mut last_norm = f64::INFINITY;
+        for it in 1..=max_iterations {
+            self.residual_into(t, q, &zero, &zero, &mut r)?;
+            let norm = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            // Force scale of the problem: the largest generalized load.
+            let scale = self.frames.iter().map(|fr| fr.s.dot(fr.fc).abs()).fold(0.0, f64::max);
+            if norm <= last_norm {
+                c = (c * 10.0).min(1e12);
+            } else {
+                c = (c * 0.1).max(1e-6);
+            }
+            last_norm = norm;
+            for v in r.iter_mut() {
+                *v = -*v;
+            }
+            self.solve_into(0.0, c, &r, &mut x)?;
+            // Limit the rotation per iteration (0.1 rad) so a far start
+            // cannot jump to another equilibrium.
+            let max_rot = self
+                .joints
+                .iter()
+                .zip(&x)
+                .filter(|(j, _)| j.kind == JointKind::Revolute)
+                .fold(0.0f64, |m, (_, xi)| m.max((c * xi).abs()));
+            let factor = if max_rot > 0.1 { 0.1 / max_rot } else { 1.0 };
+            let mut worst: f64 = 0.0;
+            for (qi, xi) in q.iter_mut().zip(&x) {
+                let dq = factor * c * xi;
+                *qi += dq;
+                worst = worst.max(dq.abs());
+            }
+            if std::env::var("CABLE_DEBUG").is_ok() { eprintln!("it {it} norm {norm:e} c {c:e} worst {worst:e} factor {factor}"); }
+            if worst < tol && (c >= 1e6 || norm <= 1e-12 * scale) {
+                self.residual_into(t, q, &zero, &zero, &mut r)?;
+                return Ok(it);
+            }
+        }
+        Err(StaticError::NotConverged { iterations: max_iterations, residual: last_norm })
+    }
+}

@@ -1,0 +1,528 @@
+//! A rope: the beam-element chain of REFERENCE §1 built from a section, a
+//! length, a number of elements, an initial centreline and its end
+//! conditions, with the bodies that hang on it as lumped links.
+//!
+//! ## Discretisation
+//! Element `i` is a rigid segment of length `L_e = L/N` carrying the
+//! element's mass `μ L_e` (centre at mid-length) and its rotary inertia
+//! (`μ L_e (L_e²/12 + r²/4)` transverse, `μ L_e r²/2` axial). It is joined to
+//! its inboard neighbour (or to the start anchor) by a 6-DOF elastic joint:
+//! bending about local z then y (`EI/L_e`, or `EI2/L_e`), torsion about the
+//! element axis x (`GJ/L_e`), then the axial slide (`EA/L_e`, engineering
+//! strain: the gap is `ε L_e`) and two shear slides (`GA/L_e`). The local x
+//! axis of each element is its tangent. Relative rotations are Euler angles
+//! z–y–x of the relative rotation, small for every element of a converged
+//! discretisation; large overall rotations are carried by the recursion, so
+//! geometric nonlinearity is exact as `N → ∞`.
+
+use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkMass, SubJoint};
+use super::material::RopeSection;
+use glam::{DMat3, DQuat, DVec3, EulerRot};
+use std::sync::Arc;
+use thiserror::Error;
+
+/// Sub-joints per rope element.
+pub const ELEMENT_DOFS: usize = 6;
+
+/// Errors building a rope.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum RopeError {
+    /// A parameter is out of range or not finite.
+    #[error("rope parameter `{name}` = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// Parameter name.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What is wrong.
+        reason: &'static str,
+    },
+    /// The initial path is unusable.
+    #[error("rope path is invalid: {0}")]
+    InvalidPath(String),
+}
+
+/// A rigid body that hangs on (or carries) a rope, as a lumped link of the
+/// rope's chain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LumpedBody {
+    /// Mass, kg.
+    pub mass: f64,
+    /// Rotational inertia about the centre of mass in the body frame, kg·m².
+    pub inertia: DMat3,
+    /// Initial position of the body frame origin (world), m.
+    pub position: DVec3,
+    /// Initial orientation.
+    pub rotation: DMat3,
+    /// Centre of mass in the body frame, m.
+    pub com: DVec3,
+}
+
+impl LumpedBody {
+    /// A solid sphere of mass `mass` (kg) and radius `radius` (m) at `position`.
+    pub fn sphere(mass: f64, radius: f64, position: DVec3) -> Self {
+        let i = 0.4 * mass * radius * radius;
+        LumpedBody { mass, inertia: DMat3::from_diagonal(DVec3::splat(i)), position, rotation: DMat3::IDENTITY, com: DVec3::ZERO }
+    }
+}
+
+/// How the rope's start is held.
+#[derive(Debug, Clone)]
+pub enum RopeStart {
+    /// Pinned (bending free, torsion held) to a frame that is fixed or moves
+    /// as prescribed; the frame origin is the rope's first point.
+    Pinned(BaseMotion),
+    /// Clamped (tangent and twist fixed to the frame as initially laid).
+    Clamped(BaseMotion),
+    /// Held by a body that slides on a prismatic joint to the world (a
+    /// trolley): the body is a link of the rope's chain.
+    SlidingBody {
+        /// The body.
+        body: LumpedBody,
+        /// Sliding axis, world frame (unit).
+        axis: DVec3,
+        /// Rope attachment point in the body frame, m.
+        anchor: DVec3,
+        /// Whether the rope is clamped (else pinned) to the body.
+        clamp: bool,
+    },
+}
+
+/// How the rope's end is held.
+#[derive(Clone)]
+pub enum RopeEnd {
+    /// Free end.
+    Free,
+    /// Pinned to a world point (fixed or moving: `t ↦ (position, velocity)`).
+    Pinned(Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>),
+    /// Clamped at a world point: position and the initial tangent held.
+    Clamped(Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>),
+    /// A body hangs on the end (hook, payload).
+    Body {
+        /// The body.
+        body: LumpedBody,
+        /// Attachment point in the body frame, m.
+        anchor: DVec3,
+        /// Clamped (else a ball joint).
+        clamp: bool,
+    },
+}
+
+impl std::fmt::Debug for RopeEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            RopeEnd::Free => f.write_str("Free"),
+            RopeEnd::Pinned(_) => f.write_str("Pinned(..)"),
+            RopeEnd::Clamped(_) => f.write_str("Clamped(..)"),
+            RopeEnd::Body { body, anchor, clamp } => {
+                f.debug_struct("Body").field("body", body).field("anchor", anchor).field("clamp", clamp).finish()
+            }
+        }
+    }
+}
+
+/// Builder of a [`RopeModel`].
+#[derive(Debug, Clone)]
+#[must_use = "Builder functions return the updated builder"]
+pub struct RopeBuilder {
+    length: f64,
+    segments: usize,
+    section: RopeSection,
+    diameter: f64,
+    shear_stiffness: Option<f64>,
+    damping: f64,
+    path: Option<Vec<DVec3>>,
+    start: RopeStart,
+    end: RopeEnd,
+    gravity: DVec3,
+    end_stiffness_factor: f64,
+}
+
+/// Where things are in a rope's chain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RopeLayout {
+    /// Number of elements `N`.
+    pub elements: usize,
+    /// Unstretched element length `L_e`, m.
+    pub element_length: f64,
+    /// Index of the first sub-joint of element 0.
+    pub first: usize,
+    /// Where the start body (trolley) sits in the chain, if any.
+    pub start_body: Option<BodyInChain>,
+    /// Where the end body (hook, payload) sits in the chain, if any.
+    pub end_body: Option<BodyInChain>,
+}
+
+/// Where a lumped body sits in a chain: the link that carries it and the
+/// body frame relative to that link's frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyInChain {
+    /// Sub-joint index whose link carries the body.
+    pub link: usize,
+    /// Body frame orientation in the link frame.
+    pub rotation: DMat3,
+    /// Body frame origin in the link frame, m.
+    pub origin: DVec3,
+}
+
+impl RopeLayout {
+    /// Sub-joint index of DOF `k` (0..6: bend z, bend y, torsion, axial,
+    /// shear y, shear z) of element `i`'s inboard joint.
+    pub fn dof(&self, i: usize, k: usize) -> usize {
+        self.first + ELEMENT_DOFS * i + k
+    }
+    /// Sub-joint index whose link is element `i`'s rigid segment.
+    pub fn element_link(&self, i: usize) -> usize {
+        self.dof(i, ELEMENT_DOFS - 1)
+    }
+}
+
+/// A built rope: its chain and initial coordinates.
+#[derive(Debug, Clone)]
+pub struct RopeModel {
+    /// The chain.
+    pub chain: Chain,
+    /// Layout of the chain.
+    pub layout: RopeLayout,
+    /// Initial coordinates.
+    pub q0: Vec<f64>,
+    /// Section properties.
+    pub section: RopeSection,
+    /// Shear stiffness GA used, N.
+    pub shear_stiffness: f64,
+    /// Rope diameter, m.
+    pub diameter: f64,
+    /// Unstretched length, m.
+    pub length: f64,
+}
+
+fn check(name: &'static str, value: f64, positive: bool) -> Result<(), RopeError> {
+    if !value.is_finite() {
+        return Err(RopeError::InvalidParameter { name, value, reason: "not a finite number" });
+    }
+    if positive && value <= 0.0 {
+        return Err(RopeError::InvalidParameter { name, value, reason: "must be > 0" });
+    }
+    if value < 0.0 {
+        return Err(RopeError::InvalidParameter { name, value, reason: "must be ≥ 0" });
+    }
+    Ok(())
+}
+
+impl RopeBuilder {
+    /// A rope of unstretched length `length` (m) cut into `segments`
+    /// elements, with section `section` and diameter `diameter` (m).
+    /// Defaults: pinned at the world origin, free end, hanging straight
+    /// down, no damping, gravity −9.81 m/s² along y, shear stiffness GA = EA.
+    pub fn new(length: f64, segments: usize, section: RopeSection, diameter: f64) -> Self {
+        RopeBuilder {
+            length,
+            segments,
+            section,
+            diameter,
+            shear_stiffness: None,
+            damping: 0.0,
+            path: None,
+            start: RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO))),
+            end: RopeEnd::Free,
+            gravity: DVec3::new(0.0, -9.81, 0.0),
+            end_stiffness_factor: 1e3,
+        }
+    }
+    /// Shear stiffness GA, N (default: EA, effectively rigid but finite).
+    pub fn shear_stiffness(mut self, ga: f64) -> Self {
+        self.shear_stiffness = Some(ga);
+        self
+    }
+    /// Stiffness-proportional damping time constant τ, s: every joint
+    /// spring k gets a damper τ·k.
+    pub fn damping(mut self, tau: f64) -> Self {
+        self.damping = tau;
+        self
+    }
+    /// Initial centreline polyline (world, m). Its first point must be the
+    /// start anchor point. A path longer than the rope pre-strains it.
+    pub fn path(mut self, points: Vec<DVec3>) -> Self {
+        self.path = Some(points);
+        self
+    }
+    /// How the start is held.
+    pub fn start(mut self, start: RopeStart) -> Self {
+        self.start = start;
+        self
+    }
+    /// How the end is held.
+    pub fn end(mut self, end: RopeEnd) -> Self {
+        self.end = end;
+        self
+    }
+    /// Gravity, m/s².
+    pub fn gravity(mut self, g: DVec3) -> Self {
+        self.gravity = g;
+        self
+    }
+    /// Stiffness of the implicit spring that pins an end to a world point,
+    /// as a multiple of the element axial stiffness `EA/L_e` (default 1000).
+    pub fn end_stiffness_factor(mut self, f: f64) -> Self {
+        self.end_stiffness_factor = f;
+        self
+    }
+
+    fn start_point(&self) -> DVec3 {
+        match &self.start {
+            RopeStart::Pinned(b) | RopeStart::Clamped(b) => b.at(0.0).position,
+            RopeStart::SlidingBody { body, anchor, .. } => body.position + body.rotation * *anchor,
+        }
+    }
+
+    /// Builds the rope.
+    pub fn build(self) -> Result<RopeModel, RopeError> {
+        let s = &self.section;
+        check("length", self.length, true)?;
+        check("diameter", self.diameter, true)?;
+        check("linear_density", s.linear_density, true)?;
+        check("ea", s.ea, true)?;
+        check("ei", s.ei, false)?;
+        check("ei2", s.ei2, false)?;
+        check("gj", s.gj, false)?;
+        check("damping", self.damping, false)?;
+        if self.segments == 0 {
+            return Err(RopeError::InvalidParameter { name: "segments", value: 0.0, reason: "must be ≥ 1" });
+        }
+        let ga = self.shear_stiffness.unwrap_or(s.ea);
+        check("shear_stiffness", ga, true)?;
+        if !self.gravity.is_finite() {
+            return Err(RopeError::InvalidParameter { name: "gravity", value: f64::NAN, reason: "not finite" });
+        }
+        let n = self.segments;
+        let le = self.length / n as f64;
+        let start = self.start_point();
+        let path = match &self.path {
+            Some(p) => p.clone(),
+            None => vec![start, start + DVec3::new(0.0, -self.length, 0.0)],
+        };
+        let nodes = resample(&path, n)?;
+        if nodes[0].distance(start) > 1e-3 {
+            return Err(RopeError::InvalidPath(format!(
+                "first path point {:?} is not the start anchor {:?}",
+                nodes[0], start
+            )));
+        }
+        // Element frames by parallel transport (no initial twist).
+        let mut rots = Vec::with_capacity(n);
+        for i in 0..n {
+            let d = (nodes[i + 1] - nodes[i]).normalize();
+            let r = if i == 0 {
+                let helper = if d.y.abs() < 0.9 { DVec3::Y } else { DVec3::X };
+                let z = d.cross(helper).normalize();
+                let y = z.cross(d);
+                DMat3::from_cols(d, y, z)
+            } else {
+                let prev: DMat3 = rots[i - 1];
+                DMat3::from_quat(DQuat::from_rotation_arc(prev.x_axis, d)) * prev
+            };
+            rots.push(r);
+        }
+        let tau = self.damping;
+        let rho = s.linear_density;
+        let r = 0.5 * self.diameter;
+        let me = rho * le;
+        let it = me * (le * le / 12.0 + r * r / 4.0);
+        let element_mass =
+            LinkMass { mass: me, com: DVec3::new(0.5 * le, 0.0, 0.0), inertia: DMat3::from_diagonal(DVec3::new(0.5 * me * r * r, it, it)) };
+        let mut joints = Vec::with_capacity(ELEMENT_DOFS * n + 6);
+        let mut q0 = Vec::with_capacity(ELEMENT_DOFS * n + 6);
+        let identity = DMat3::IDENTITY;
+        let spring = |kind, axis, k: f64, link| SubJoint {
+            kind,
+            axis,
+            offset: DVec3::ZERO,
+            pre_rotation: identity,
+            stiffness: k,
+            damping: tau * k,
+            rest: 0.0,
+            link,
+        };
+        // Root: base frame and (for a trolley) its prismatic sub-joint.
+        let (base, clamp_start, parent_rot, first_offset, start_body) = match &self.start {
+            RopeStart::Pinned(b) => (b.clone(), false, b.at(0.0).rotation, DVec3::ZERO, None),
+            RopeStart::Clamped(b) => (b.clone(), true, b.at(0.0).rotation, DVec3::ZERO, None),
+            RopeStart::SlidingBody { body, axis, anchor, clamp } => {
+                let base = BaseMotion::Fixed(BaseState::fixed(body.rotation, body.position));
+                let mut j = spring(JointKind::Prismatic, body.rotation.transpose() * axis.normalize(), 0.0, None);
+                j.link = Some(LinkMass { mass: body.mass, com: body.com, inertia: body.inertia });
+                joints.push(j);
+                q0.push(0.0);
+                (base, *clamp, body.rotation, *anchor, Some(BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }))
+            }
+        };
+        let first = joints.len();
+        for i in 0..n {
+            let (kb, kb2, kt) = if i == 0 {
+                if clamp_start {
+                    (2.0 * s.ei / le, 2.0 * s.ei2 / le, 2.0 * s.gj / le)
+                } else {
+                    (0.0, 0.0, 2.0 * s.gj / le)
+                }
+            } else {
+                (s.ei / le, s.ei2 / le, s.gj / le)
+            };
+            let mut jz = spring(JointKind::Revolute, DVec3::Z, kb, None);
+            let jy = spring(JointKind::Revolute, DVec3::Y, kb2, None);
+            let jx = spring(JointKind::Revolute, DVec3::X, kt, None);
+            let px = spring(JointKind::Prismatic, DVec3::X, s.ea / le, None);
+            let py = spring(JointKind::Prismatic, DVec3::Y, ga / le, None);
+            let pz = spring(JointKind::Prismatic, DVec3::Z, ga / le, Some(element_mass));
+            let (angles, offset) = if i == 0 {
+                jz.pre_rotation = parent_rot.transpose() * rots[0];
+                ((0.0, 0.0, 0.0), first_offset)
+            } else {
+                let rel = rots[i - 1].transpose() * rots[i];
+                (DQuat::from_mat3(&rel).to_euler(EulerRot::ZYX), DVec3::new(le, 0.0, 0.0))
+            };
+            jz.offset = offset;
+            let gap = nodes[i + 1].distance(nodes[i]) - le;
+            joints.extend([jz, jy, jx, px, py, pz]);
+            q0.extend([angles.0, angles.1, angles.2, gap, 0.0, 0.0]);
+        }
+        let tip_link = first + ELEMENT_DOFS * n - 1;
+        let mut end_body = None;
+        let mut anchors = Vec::new();
+        let k_end = self.end_stiffness_factor * s.ea / le;
+        match &self.end {
+            RopeEnd::Free => {}
+            RopeEnd::Pinned(target) | RopeEnd::Clamped(target) => {
+                let rotation = if matches!(self.end, RopeEnd::Clamped(_)) {
+                    let kr = self.end_stiffness_factor * s.ei.max(s.gj).max(1e-9) / le;
+                    Some((rots[n - 1], kr, tau * kr))
+                } else {
+                    None
+                };
+                anchors.push(AnchorSpring {
+                    link: tip_link,
+                    local_point: DVec3::new(le, 0.0, 0.0),
+                    target: target.clone(),
+                    stiffness: k_end,
+                    damping: tau * k_end,
+                    rotation,
+                });
+            }
+            RopeEnd::Body { body, anchor, clamp } => {
+                let c = rots[n - 1].transpose() * body.rotation;
+                let local = LinkMass {
+                    mass: body.mass,
+                    com: c * (body.com - *anchor),
+                    inertia: c * body.inertia * c.transpose(),
+                };
+                if *clamp {
+                    let shifted = LinkMass { com: local.com + DVec3::new(le, 0.0, 0.0), ..local };
+                    let lm = joints[tip_link].link.as_ref().map(|m| m.combine(&shifted));
+                    joints[tip_link].link = lm;
+                    end_body = Some(BodyInChain { link: tip_link, rotation: c, origin: DVec3::new(le, 0.0, 0.0) - c * *anchor });
+                } else {
+                    let mut jz = spring(JointKind::Revolute, DVec3::Z, 0.0, None);
+                    jz.offset = DVec3::new(le, 0.0, 0.0);
+                    let jy = spring(JointKind::Revolute, DVec3::Y, 0.0, None);
+                    let jx = spring(JointKind::Revolute, DVec3::X, 0.0, Some(local));
+                    joints.extend([jz, jy, jx]);
+                    q0.extend([0.0, 0.0, 0.0]);
+                    end_body = Some(BodyInChain { link: joints.len() - 1, rotation: DMat3::IDENTITY, origin: -*anchor });
+                }
+            }
+        }
+        // Highest-frequency estimate (explicit schemes): element axial, shear,
+        // bending, torsion, end-spring and tension-kink modes, 2√(k/m) each.
+        let hanging = match &self.end {
+            RopeEnd::Body { body, .. } => body.mass,
+            _ => 0.0,
+        } + rho * self.length;
+        let t_max = 2.0 * hanging * self.gravity.length() + 0.0;
+        let omega2 = [
+            4.0 * s.ea.max(ga) / le / me,
+            16.0 * s.ei.max(s.ei2) / le / it,
+            4.0 * s.gj / le / (0.5 * me * r * r),
+            if anchors.is_empty() { 0.0 } else { 4.0 * k_end / me },
+            12.0 * t_max / (me * le),
+        ]
+        .into_iter()
+        .fold(0.0, f64::max);
+        let origin = start;
+        let mut chain = Chain::new(joints, base, self.gravity, origin);
+        chain.anchors = anchors;
+        chain.max_frequency = Some(omega2.sqrt());
+        let layout = RopeLayout { elements: n, element_length: le, first, start_body, end_body };
+        let zeros = vec![0.0; q0.len()];
+        let mut r = vec![0.0; q0.len()];
+        chain
+            .residual_into(0.0, &q0, &zeros, &zeros, &mut r)
+            .map_err(|e| RopeError::InvalidPath(format!("initial state: {e}")))?;
+        Ok(RopeModel {
+            chain,
+            layout,
+            q0,
+            section: self.section,
+            shear_stiffness: ga,
+            diameter: self.diameter,
+            length: self.length,
+        })
+    }
+}
+
+/// Resamples a polyline at `n + 1` points equally spaced in arc length.
+fn resample(path: &[DVec3], n: usize) -> Result<Vec<DVec3>, RopeError> {
+    if path.len() < 2 {
+        return Err(RopeError::InvalidPath("needs at least 2 points".into()));
+    }
+    if path.iter().any(|p| !p.is_finite()) {
+        return Err(RopeError::InvalidPath("contains a non-finite point".into()));
+    }
+    let seg: Vec<f64> = path.windows(2).map(|w| w[0].distance(w[1])).collect();
+    let total: f64 = seg.iter().sum();
+    if total <= 0.0 {
+        return Err(RopeError::InvalidPath("has zero length".into()));
+    }
+    let mut out = Vec::with_capacity(n + 1);
+    let (mut k, mut acc) = (0usize, 0.0);
+    for i in 0..=n {
+        let target = total * i as f64 / n as f64;
+        while k + 1 < seg.len() && acc + seg[k] < target {
+            acc += seg[k];
+            k += 1;
+        }
+        let t = if seg[k] > 0.0 { ((target - acc) / seg[k]).clamp(0.0, 1.0) } else { 0.0 };
+        out.push(path[k].lerp(path[k + 1], t));
+    }
+    Ok(out)
+}
+
+impl RopeModel {
+    /// World positions of the `N + 1` nodes (element ends) after the last
+    /// residual evaluation of the chain, m.
+    pub fn nodes(&self) -> Vec<DVec3> {
+        let l = &self.layout;
+        let mut out: Vec<DVec3> = (0..l.elements).map(|i| self.chain.joint_point(l.dof(i, 0))).collect();
+        out.push(self.chain.link_point(l.element_link(l.elements - 1), DVec3::new(l.element_length, 0.0, 0.0)));
+        out
+    }
+
+    /// World pose and velocity of a body in the chain: position of the body
+    /// origin (m), orientation, velocity of the origin (m/s), angular
+    /// velocity (rad/s).
+    pub fn body_state(&self, b: &BodyInChain) -> (DVec3, DMat3, DVec3, DVec3) {
+        let ch = &self.chain;
+        (
+            ch.link_point(b.link, b.origin),
+            ch.link_rotation(b.link) * b.rotation,
+            ch.link_point_velocity(b.link, b.origin),
+            ch.link_velocity(b.link).top,
+        )
+    }
+
+    /// Axial force of element joint `i` (tension positive), N: `EA/L_e · u +
+    /// damping`, at coordinates `q` and rates `v`.
+    pub fn tension(&self, i: usize, q: &[f64], v: &[f64]) -> f64 {
+        let s = self.layout.dof(i, 3);
+        let j = &self.chain.joints[s];
+        j.stiffness * (q[s] - j.rest) + j.damping * v[s]
+    }
+}

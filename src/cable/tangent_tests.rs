@@ -1,0 +1,139 @@
+//! The O(n) implicit tangent against a central finite-difference Jacobian
+//! of the residual (DESIGN.md: "Prove yours the same way in a unit test
+//! first").
+
+use super::*;
+use glam::{DMat3, DVec3};
+use std::sync::Arc;
+
+/// Tiny deterministic generator for reproducible "random" numbers.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+}
+
+fn soft_section() -> RopeSection {
+    RopeSection { linear_density: 2.0, ea: 3e3, ei: 4.0, ei2: 6.0, gj: 3.0, min_breaking_load: 0.0 }
+}
+
+fn bent_path() -> Vec<DVec3> {
+    (0..=20)
+        .map(|k| {
+            let s = k as f64 / 20.0;
+            DVec3::new(0.4 * s.powi(2), -1.0 * s, 0.3 * (2.0 * s).sin())
+        })
+        .collect()
+}
+
+/// Checks `(M + c_q K_t) x = b` for the x the O(n) solve returns, with
+/// `M x` and `K_t x` measured from the residual alone.
+fn check_tangent(model: &mut RopeModel, seed: u64, c_q: f64) -> f64 {
+    let mut rng = Lcg(seed);
+    let n = model.chain.len();
+    let q: Vec<f64> = model.q0.iter().map(|x| x + 0.05 * rng.next()).collect();
+    let zero = vec![0.0; n];
+    let mut r0 = vec![0.0; n];
+    let mut worst: f64 = 0.0;
+    for _ in 0..3 {
+        let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let mut x = vec![0.0; n];
+        model.chain.residual_into(0.0, &q, &zero, &zero, &mut r0).unwrap();
+        model.chain.solve_into(0.0, c_q, &b, &mut x).unwrap();
+        // M x from the residual (linear in a at v = 0).
+        let mut rx = vec![0.0; n];
+        model.chain.residual_into(0.0, &q, &zero, &x, &mut rx).unwrap();
+        // K_t x by central differences along x.
+        let xmax = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let eps = 1e-5 / xmax;
+        let qp: Vec<f64> = q.iter().zip(&x).map(|(a, b)| a + eps * b).collect();
+        let qm: Vec<f64> = q.iter().zip(&x).map(|(a, b)| a - eps * b).collect();
+        let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
+        model.chain.residual_into(0.0, &qp, &zero, &zero, &mut rp).unwrap();
+        model.chain.residual_into(0.0, &qm, &zero, &zero, &mut rm).unwrap();
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..n {
+            let mx = rx[i] - r0[i];
+            let kx = (rp[i] - rm[i]) / (2.0 * eps);
+            let err = (mx + c_q * kx - b[i]).abs() / scale;
+            worst = worst.max(err);
+        }
+    }
+    worst
+}
+
+fn loaded_rope(end: RopeEnd, clamp: bool) -> RopeModel {
+    let base = BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO));
+    let start = if clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) };
+    let mut m = RopeBuilder::new(1.2, 5, soft_section(), 0.05)
+        .path(bent_path())
+        .start(start)
+        .end(end)
+        .gravity(DVec3::new(0.3, -9.81, 0.2))
+        .end_stiffness_factor(2.0)
+        .build()
+        .unwrap();
+    // A point load of fixed direction off the axis of element 2.
+    let link = m.layout.element_link(2);
+    m.chain.loads.push(LinkLoad { link, force: DVec3::new(40.0, -25.0, 10.0), local_point: DVec3::new(0.1, 0.02, -0.03), moment: DVec3::ZERO });
+    m
+}
+
+fn payload() -> RopeEnd {
+    let mut body = LumpedBody::sphere(30.0, 0.2, DVec3::new(0.4, -1.0 - 0.25, 0.3 * 2f64.sin()));
+    body.rotation = DMat3::from_rotation_x(0.3) * DMat3::from_rotation_z(-0.2);
+    let anchor = body.rotation.transpose() * DVec3::new(0.0, 0.25, 0.0);
+    RopeEnd::Body { body, anchor, clamp: false }
+}
+
+#[test]
+fn tangent_matches_finite_differences_with_payload() {
+    for (seed, c_q) in [(1, 1.0), (2, 1e-2), (3, 1e-4)] {
+        let mut m = loaded_rope(payload(), true);
+        let err = check_tangent(&mut m, seed, c_q);
+        eprintln!("payload c_q={c_q}: {err:e}");
+        assert!(err < 1e-7, "payload chain: tangent residual {err:e} at c_q = {c_q}");
+    }
+}
+
+#[test]
+fn tangent_matches_finite_differences_pinned_ends() {
+    let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> =
+        Arc::new(|_| (DVec3::new(0.5, -0.9, 0.2), DVec3::ZERO));
+    for (seed, c_q) in [(4, 1.0), (5, 1e-3)] {
+        let mut m = loaded_rope(RopeEnd::Pinned(target.clone()), false);
+        let err = check_tangent(&mut m, seed, c_q);
+        eprintln!("pinned c_q={c_q}: {err:e}");
+        assert!(err < 1e-7, "pinned chain: tangent residual {err:e} at c_q = {c_q}");
+    }
+}
+
+#[test]
+fn tangent_without_geometric_stiffness_fails_the_same_check() {
+    // Guard: the check is sharp enough to see a missing K_g.
+    let mut m = loaded_rope(payload(), true);
+    let n = m.chain.len();
+    let mut rng = Lcg(9);
+    let q: Vec<f64> = m.q0.iter().map(|x| x + 0.05 * rng.next()).collect();
+    let zero = vec![0.0; n];
+    let mut r0 = vec![0.0; n];
+    m.chain.residual_into(0.0, &q, &zero, &zero, &mut r0).unwrap();
+    for fr in m.chain.frames.iter_mut() {
+        fr.b = spatial::M6::ZERO;
+    }
+    let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+    let mut x = vec![0.0; n];
+    m.chain.solve_into(0.0, 1.0, &b, &mut x).unwrap();
+    let mut rx = vec![0.0; n];
+    m.chain.residual_into(0.0, &q, &zero, &x, &mut rx).unwrap();
+    let eps = 1e-7;
+    let qp: Vec<f64> = q.iter().zip(&x).map(|(a, b)| a + eps * b).collect();
+    let qm: Vec<f64> = q.iter().zip(&x).map(|(a, b)| a - eps * b).collect();
+    let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
+    m.chain.residual_into(0.0, &qp, &zero, &zero, &mut rp).unwrap();
+    m.chain.residual_into(0.0, &qm, &zero, &zero, &mut rm).unwrap();
+    let worst = (0..n).map(|i| (rx[i] - r0[i] + (rp[i] - rm[i]) / (2.0 * eps) - b[i]).abs()).fold(0.0, f64::max);
+    assert!(worst > 1e-3, "the check did not notice a missing geometric stiffness ({worst:e})");
+}

@@ -1,0 +1,359 @@
+//! The [`Integrator`]: one scheme, its Newton and sub-step settings, and the
+//! reusable work vectors.
+
+use std::ops::AddAssign;
+
+use super::error::IntegrateError;
+use super::explicit;
+use super::newmark_family::{step_alpha, step_linearly_implicit};
+use super::newton::{Failure, NewtonSettings};
+use super::scheme::Scheme;
+use super::state::State;
+use super::system::SecondOrderSystem;
+use super::wilson::step_wilson;
+
+/// How a step is split into sub-steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Substeps {
+    /// Explicit schemes choose their sub-steps from the system's highest
+    /// frequency ([`explicit::substeps_needed`](super::substeps_needed));
+    /// implicit schemes take one step (splitting it only as the Newton
+    /// fallback). The default.
+    #[default]
+    Auto,
+    /// Exactly `n` equal sub-steps. For explicit schemes the sub-step is
+    /// checked against the stability limit (symplectic Euler, RK4) or the
+    /// 0.1 % growth bound (explicit and improved Euler) and the step fails
+    /// with [`IntegrateError::StepTooLarge`] beyond it. Implicit schemes are
+    /// not checked.
+    Fixed(u32),
+    /// Exactly `n` equal sub-steps and no check at all: the caller accepts
+    /// growth or instability (needed to reproduce textbook recurrences of
+    /// the explicit schemes at large steps).
+    Unchecked(u32),
+}
+
+/// Work done by one call of [`Integrator::step`]. Counts include failed
+/// attempts of the Newton fallback, so they measure cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepStats {
+    /// Newton iterations (one residual and one tangent solve each), total.
+    pub newton_iterations: usize,
+    /// Residual evaluations, total.
+    pub residual_evals: usize,
+    /// Tangent solves, total (including `c_v = c_q = 0` solves).
+    pub solves: usize,
+    /// Sub-steps of the accepted step (1 unless split).
+    pub substeps_used: u64,
+}
+
+impl AddAssign for StepStats {
+    fn add_assign(&mut self, o: Self) {
+        self.newton_iterations += o.newton_iterations;
+        self.residual_evals += o.residual_evals;
+        self.solves += o.solves;
+        self.substeps_used += o.substeps_used;
+    }
+}
+
+/// Reusable vectors, sized on the first step (no allocation afterwards
+/// unless the number of coordinates changes).
+#[derive(Debug, Default)]
+pub(crate) struct Workspace {
+    pub qb: Vec<f64>,
+    pub vb: Vec<f64>,
+    pub q: Vec<f64>,
+    pub v: Vec<f64>,
+    pub x: Vec<f64>,
+    pub r: Vec<f64>,
+    pub dx: Vec<f64>,
+    pub zeros: Vec<f64>,
+    pub sq: Vec<f64>,
+    pub sv: Vec<f64>,
+    pub sa: Vec<f64>,
+    pub dq_sum: Vec<f64>,
+    pub dv_sum: Vec<f64>,
+    backup: [Vec<f64>; 4],
+    backup_t: f64,
+}
+
+impl Workspace {
+    fn ensure(&mut self, n: usize) {
+        if self.zeros.len() == n {
+            return;
+        }
+        let vectors = [
+            &mut self.qb, &mut self.vb, &mut self.q, &mut self.v, &mut self.x, &mut self.r,
+            &mut self.dx, &mut self.sq, &mut self.sv, &mut self.sa, &mut self.dq_sum,
+            &mut self.dv_sum,
+        ];
+        for x in vectors.into_iter().chain(self.backup.iter_mut()) {
+            x.resize(n, 0.0);
+        }
+        self.zeros.clear();
+        self.zeros.resize(n, 0.0);
+    }
+
+    fn save(&mut self, s: &State) {
+        self.backup_t = s.t;
+        for (b, x) in self.backup.iter_mut().zip([&s.q, &s.v, &s.a, &s.a_hat]) {
+            b.copy_from_slice(x);
+        }
+    }
+
+    fn restore(&self, s: &mut State) {
+        s.t = self.backup_t;
+        for (b, x) in self.backup.iter().zip([&mut s.q, &mut s.v, &mut s.a, &mut s.a_hat]) {
+            x.copy_from_slice(b);
+        }
+    }
+}
+
+/// Advances a [`State`] of any [`SecondOrderSystem`] with one [`Scheme`].
+///
+/// ```
+/// use bevy_rapier_cable::integrate::{DenseSystem, Integrator, State};
+/// // ẍ + (2π)² x = 0, x(0) = 1: one period with the default generalized-α.
+/// let mut sys = DenseSystem::oscillator(1.0, 0.0, 4.0 * std::f64::consts::PI.powi(2)).unwrap();
+/// let mut state = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).unwrap();
+/// let mut integrator = Integrator::default();
+/// for _ in 0..1000 {
+///     integrator.step(&mut sys, &mut state, 1e-3).unwrap();
+/// }
+/// assert!((state.q[0] - 1.0).abs() < 1e-4);
+/// ```
+#[derive(Debug)]
+pub struct Integrator {
+    /// The scheme.
+    pub scheme: Scheme,
+    /// Newton control and fallback (implicit schemes).
+    pub newton: NewtonSettings,
+    /// Sub-step policy.
+    pub substeps: Substeps,
+    /// Largest number of sub-steps [`Substeps::Auto`] may choose for an
+    /// explicit scheme before failing with
+    /// [`IntegrateError::TooManySubsteps`]. Default 1 000 000 (explicit Euler
+    /// needs 1.4·10⁷ sub-steps per 1/60 s step at ω = 10⁴ rad/s).
+    pub max_explicit_substeps: u64,
+    ws: Workspace,
+}
+
+impl Integrator {
+    /// An integrator for `scheme` with default settings.
+    pub fn new(scheme: Scheme) -> Self {
+        Integrator {
+            scheme,
+            newton: NewtonSettings::default(),
+            substeps: Substeps::Auto,
+            max_explicit_substeps: 1_000_000,
+            ws: Workspace::default(),
+        }
+    }
+
+    /// Sets the sub-step policy.
+    pub fn with_substeps(mut self, substeps: Substeps) -> Self {
+        self.substeps = substeps;
+        self
+    }
+
+    /// Sets the Newton settings.
+    pub fn with_newton(mut self, newton: NewtonSettings) -> Self {
+        self.newton = newton;
+        self
+    }
+
+    /// Advances `state` by `h` (s). On error the state is left as it was.
+    pub fn step<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        state: &mut State,
+        h: f64,
+    ) -> Result<StepStats, IntegrateError> {
+        let t = state.t;
+        let fixed = match self.substeps {
+            Substeps::Auto => None,
+            Substeps::Fixed(n) | Substeps::Unchecked(n) => Some(n),
+        };
+        if !(h.is_finite() && h > 0.0) || fixed == Some(0) {
+            return Err(IntegrateError::InvalidStep { t, h, substeps: fixed.unwrap_or(1) });
+        }
+        self.scheme.validate().map_err(|source| IntegrateError::InvalidScheme { t, source })?;
+        state.check_dimensions(sys.dof())?;
+        self.ws.ensure(state.dof());
+        self.ws.save(state);
+        let mut stats = StepStats::default();
+        let result = if self.scheme.is_explicit() {
+            self.step_explicit(sys, state, h, &mut stats)
+        } else {
+            self.step_implicit(sys, state, h, fixed.unwrap_or(1), &mut stats)
+        };
+        match result {
+            Ok(()) if state.is_finite() => {
+                state.t = t + h;
+                Ok(stats)
+            }
+            Ok(()) => {
+                self.ws.restore(state);
+                Err(IntegrateError::NonFinite { t })
+            }
+            Err(e) => {
+                self.ws.restore(state);
+                Err(e)
+            }
+        }
+    }
+
+    fn step_explicit<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        state: &mut State,
+        h: f64,
+        stats: &mut StepStats,
+    ) -> Result<(), IntegrateError> {
+        let (t, scheme) = (state.t, self.scheme.name());
+        let n = match self.substeps {
+            Substeps::Unchecked(n) => u64::from(n),
+            policy => {
+                let omega = sys
+                    .max_frequency(&state.q)
+                    .filter(|w| !w.is_nan())
+                    .ok_or(IntegrateError::UnknownFrequency { t, scheme })?;
+                let needed = explicit::substeps_needed(&self.scheme, h, omega).unwrap_or(1.0);
+                match policy {
+                    Substeps::Fixed(n) => {
+                        let limit = explicit::admissible_substep(&self.scheme, h, omega);
+                        if h / f64::from(n) > limit {
+                            return Err(IntegrateError::StepTooLarge {
+                                t, h, substeps: n, limit, omega_max: omega, scheme,
+                            });
+                        }
+                        u64::from(n)
+                    }
+                    _ if needed.ceil() > self.max_explicit_substeps as f64 => {
+                        return Err(IntegrateError::TooManySubsteps {
+                            t, h, needed: needed.ceil(), max: self.max_explicit_substeps,
+                            omega_max: omega, scheme,
+                        });
+                    }
+                    _ => needed.ceil() as u64,
+                }
+            }
+        };
+        for k in 0..n {
+            let hs = h / n as f64;
+            state.t = t + h * (k as f64) / (n as f64);
+            explicit::step(sys, state, &mut self.ws, &self.scheme, hs, stats)?;
+        }
+        stats.substeps_used += n;
+        Ok(())
+    }
+
+    fn step_implicit<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        state: &mut State,
+        h: f64,
+        n0: u32,
+        stats: &mut StepStats,
+    ) -> Result<(), IntegrateError> {
+        let t = state.t;
+        let max_n = n0.saturating_mul(self.newton.max_substeps.max(1));
+        let mut n = n0;
+        loop {
+            match self.try_substeps(sys, state, h, n, stats) {
+                Ok(()) => {
+                    stats.substeps_used += u64::from(n);
+                    return Ok(());
+                }
+                Err(failure) => {
+                    self.ws.restore(state);
+                    let next = n.saturating_mul(2);
+                    if next > max_n || next == n {
+                        return Err(match failure {
+                            Failure::NotConverged { iterations } => {
+                                IntegrateError::NotConverged { t, h, substeps: n, iterations }
+                            }
+                            Failure::Error(e) => e,
+                        });
+                    }
+                    n = next;
+                }
+            }
+        }
+    }
+
+    fn try_substeps<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        state: &mut State,
+        h: f64,
+        n: u32,
+        stats: &mut StepStats,
+    ) -> Result<(), Failure> {
+        let (t, hs) = (state.t, h / f64::from(n));
+        let ws = &mut self.ws;
+        let newton = &self.newton;
+        for k in 0..n {
+            state.t = t + h * f64::from(k) / f64::from(n);
+            match self.scheme {
+                Scheme::WilsonTheta { theta } => step_wilson(sys, state, ws, theta, hs, newton, stats)?,
+                Scheme::LinearlyImplicit { w } => {
+                    step_linearly_implicit(sys, state, ws, w, hs, newton, stats)?
+                }
+                ref s => {
+                    let p = s.alpha_parameters().expect("every other implicit scheme is generalized-α");
+                    step_alpha(sys, state, ws, p, hs, newton, stats)?
+                }
+            }
+            if !state.is_finite() {
+                return Err(Failure::Error(IntegrateError::NonFinite { t: state.t }));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Default for Integrator {
+    fn default() -> Self {
+        Integrator::new(Scheme::default())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrate::DenseSystem;
+
+    /// The example of the [`Integrator`] docs.
+    #[test]
+    fn doc_example_one_period() {
+        let mut sys = DenseSystem::oscillator(1.0, 0.0, 4.0 * std::f64::consts::PI.powi(2)).expect("valid");
+        let mut state = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).expect("state");
+        let mut integrator = Integrator::default();
+        for _ in 0..1000 {
+            integrator.step(&mut sys, &mut state, 1e-3).expect("step");
+        }
+        assert!((state.q[0] - 1.0).abs() < 1e-4, "{}", state.q[0]);
+    }
+
+    #[test]
+    fn invalid_inputs_are_typed_errors() {
+        let mut sys = DenseSystem::oscillator(1.0, 0.0, 1.0).expect("valid");
+        let mut state = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).expect("state");
+        let mut integ = Integrator::default();
+        assert!(matches!(integ.step(&mut sys, &mut state, 0.0), Err(IntegrateError::InvalidStep { .. })));
+        assert!(matches!(integ.step(&mut sys, &mut state, f64::NAN), Err(IntegrateError::InvalidStep { .. })));
+        integ.substeps = Substeps::Fixed(0);
+        assert!(matches!(integ.step(&mut sys, &mut state, 0.1), Err(IntegrateError::InvalidStep { .. })));
+        let mut bad = Integrator::new(Scheme::Hht { alpha: 0.5 });
+        let e = bad.step(&mut sys, &mut state, 0.1).expect_err("alpha out of range");
+        assert!(matches!(e, IntegrateError::InvalidScheme { .. }) && e.to_string().contains("t = 0 s"), "{e}");
+        integ.substeps = Substeps::Auto;
+        let mut short = State { t: 0.0, q: vec![], v: vec![], a: vec![], a_hat: vec![] };
+        assert!(matches!(
+            integ.step(&mut sys, &mut short, 0.1),
+            Err(IntegrateError::DimensionMismatch { expected: 1, got: 0, .. })
+        ));
+        assert!(State::new(&mut sys, 0.0, vec![1.0, 2.0], vec![0.0, 0.0]).is_err());
+    }
+}

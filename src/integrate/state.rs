@@ -1,0 +1,111 @@
+//! The integrator state `(t, q, v, a, â)`.
+
+use super::error::IntegrateError;
+use super::integrator::StepStats;
+use super::system::SecondOrderSystem;
+
+/// The state a scheme carries from step to step.
+///
+/// Units follow the system's coordinates: `q` in m or rad, `v` in m/s or
+/// rad/s, `a` and `a_hat` in m/s² or rad/s².
+#[derive(Clone, Debug, PartialEq)]
+pub struct State {
+    /// Time, s.
+    pub t: f64,
+    /// Generalized coordinates.
+    pub q: Vec<f64>,
+    /// Generalized velocities.
+    pub v: Vec<f64>,
+    /// Accelerations. Consistent with `(t, q, v)` after [`State::new`] and
+    /// after every step of the explicit, Newmark-family and linearly
+    /// implicit schemes (to the Newton tolerance); Wilson-θ stores its
+    /// interpolated acceleration, which is not.
+    pub a: Vec<f64>,
+    /// Generalized-α pseudo-acceleration â (equal to `a` for every other
+    /// scheme).
+    pub a_hat: Vec<f64>,
+}
+
+impl State {
+    /// A state at time `t` (s) with coordinates `q` and velocities `v`, and
+    /// the consistent initial acceleration `a₀ = M⁻¹ Q(t, q, v)` (one
+    /// residual and one solve with `c_v = c_q = 0`); `â₀ = a₀`.
+    pub fn new<S: SecondOrderSystem + ?Sized>(
+        sys: &mut S,
+        t: f64,
+        q: Vec<f64>,
+        v: Vec<f64>,
+    ) -> Result<Self, IntegrateError> {
+        let n = q.len();
+        let mut state = State { t, q, v, a: vec![0.0; n], a_hat: vec![0.0; n] };
+        state.check_dimensions(sys.dof())?;
+        state.recompute_acceleration(sys)?;
+        Ok(state)
+    }
+
+    /// Number of coordinates.
+    pub fn dof(&self) -> usize {
+        self.q.len()
+    }
+
+    /// Recomputes `a` (and sets `â = a`) from `(t, q, v)`. Call it after
+    /// changing `q` or `v` by hand (a teleport) or before switching from
+    /// Wilson-θ to another scheme.
+    pub fn recompute_acceleration<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+    ) -> Result<(), IntegrateError> {
+        self.check_dimensions(sys.dof())?;
+        let n = self.dof();
+        let (zeros, mut r) = (vec![0.0; n], vec![0.0; n]);
+        let mut stats = StepStats::default();
+        acceleration(sys, self.t, &self.q, &self.v, &zeros, &mut r, &mut self.a, &mut stats)?;
+        self.a_hat.copy_from_slice(&self.a);
+        Ok(())
+    }
+
+    /// Checks that all four vectors have `dof` entries.
+    pub(crate) fn check_dimensions(&self, dof: usize) -> Result<(), IntegrateError> {
+        let vectors = [("q", &self.q), ("v", &self.v), ("a", &self.a), ("a_hat", &self.a_hat)];
+        for (what, x) in vectors {
+            if x.len() != dof {
+                return Err(IntegrateError::DimensionMismatch { t: self.t, what, expected: dof, got: x.len() });
+            }
+        }
+        Ok(())
+    }
+
+    /// True when every entry of `q`, `v`, `a` and `a_hat` is finite.
+    pub fn is_finite(&self) -> bool {
+        [&self.q, &self.v, &self.a, &self.a_hat].iter().all(|x| x.iter().all(|y| y.is_finite()))
+    }
+}
+
+/// Forward dynamics `out = M⁻¹ Q(t, q, v)`: the residual at `a = 0` is `−Q`,
+/// then one solve with `c_v = c_q = 0`. `zeros` must be all zero; `r` is
+/// scratch.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn acceleration<S: SecondOrderSystem + ?Sized>(
+    sys: &mut S,
+    t: f64,
+    q: &[f64],
+    v: &[f64],
+    zeros: &[f64],
+    r: &mut [f64],
+    out: &mut [f64],
+    stats: &mut StepStats,
+) -> Result<(), IntegrateError> {
+    let sys_err = |source| IntegrateError::System { t, source };
+    sys.residual(t, q, v, zeros, r).map_err(sys_err)?;
+    stats.residual_evals += 1;
+    for ri in r.iter_mut() {
+        *ri = -*ri;
+    }
+    sys.solve_tangent(t, q, v, zeros, 0.0, 0.0, r, out).map_err(sys_err)?;
+    stats.solves += 1;
+    if out.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(IntegrateError::NonFinite { t })
+    }
+}

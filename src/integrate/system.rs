@@ -1,0 +1,84 @@
+//! The one trait every second-order system implements so that every
+//! integrator can step it: a 1-DOF oscillator, a small dense model, or a rope
+//! with thousands of elements (which implements the solve in O(n)).
+
+use thiserror::Error;
+
+/// Why a system could not evaluate its residual or solve its tangent.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SystemError {
+    /// The effective (tangent) matrix is singular or not positive at some pivot.
+    #[error("singular effective matrix at coordinate {index} (pivot {pivot:e})")]
+    Singular {
+        /// Index of the coordinate (or sub-joint) where the pivot failed.
+        index: usize,
+        /// The offending pivot value.
+        pivot: f64,
+    },
+    /// The state contains NaN or infinite values.
+    #[error("non-finite state at coordinate {index}")]
+    NonFinite {
+        /// Index of the first non-finite coordinate.
+        index: usize,
+    },
+}
+
+/// A second-order system `M(q) q̈ = Q(t, q, q̇)` in residual form.
+///
+/// Coordinates `q` live in a plain vector space ℝⁿ (for a rope: relative
+/// displacements in m and relative rotation angles in rad).
+///
+/// The residual is `r(t, q, v, a) = M(q) a − Q(t, q, v)`; it is zero at the
+/// true acceleration. Implicit integrators drive it to zero with Newton's
+/// method, solving with the scheme's effective matrix
+/// `M + c_v·C_t + c_q·K_t`, where `C_t = ∂r/∂v` and `K_t = ∂r/∂q` (exact or
+/// approximate tangents: Newton converges to the exact residual either way,
+/// only the rate depends on the tangent).
+pub trait SecondOrderSystem {
+    /// Number of generalized coordinates `n`.
+    fn dof(&self) -> usize;
+
+    /// Writes `r = M(q) a − Q(t, q, v)` into `r` (length `n`).
+    fn residual(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        r: &mut [f64],
+    ) -> Result<(), SystemError>;
+
+    /// Solves `(M + c_v·C_t + c_q·K_t) x = b` with the tangents taken at
+    /// `(t, q, v, a)`. Explicit schemes call it with `c_v = c_q = 0` (then it
+    /// is the forward-dynamics solve `x = M⁻¹ b`).
+    ///
+    /// Integrators always call [`residual`](Self::residual) at the same
+    /// `(t, q, v, a)` just before, so an implementation may reuse what the
+    /// residual computed (kinematics, loads).
+    #[allow(clippy::too_many_arguments)]
+    fn solve_tangent(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        c_v: f64,
+        c_q: f64,
+        b: &[f64],
+        x: &mut [f64],
+    ) -> Result<(), SystemError>;
+
+    /// An upper estimate of the highest natural angular frequency of the
+    /// system at `q`, rad/s. Explicit schemes use it to choose their
+    /// sub-steps; `None` means unknown (explicit schemes then refuse to pick
+    /// sub-steps automatically).
+    fn max_frequency(&self, _q: &[f64]) -> Option<f64> {
+        None
+    }
+
+    /// Absolute tolerance on the Newton position correction, in the units of
+    /// `q` (m or rad). Default `1e-10`.
+    fn position_tolerance(&self) -> f64 {
+        1e-10
+    }
+}

@@ -1,0 +1,133 @@
+//! Components and messages of the cable plugin.
+
+use crate::cable::{BodyInChain, Cable, RopeSection};
+use crate::integrate::Scheme;
+use bevy::prelude::*;
+use glam::DVec3;
+use std::sync::{Arc, Mutex};
+
+/// Where a cable end is held.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CableAnchor {
+    /// A free end.
+    Free,
+    /// A world point, m; `clamp` also fixes the tangent.
+    World {
+        /// The point.
+        point: Vec3,
+        /// Fix the tangent too.
+        clamp: bool,
+    },
+    /// A point of a rapier body (an entity with `RigidBody`), in the body's
+    /// local frame, m.
+    Body {
+        /// The body entity.
+        entity: Entity,
+        /// Attachment point in the body frame, m.
+        anchor: Vec3,
+        /// Fix the tangent too.
+        clamp: bool,
+    },
+}
+
+/// Spawn an entity with this to get a cable. The plugin builds it at the
+/// next fixed step (after rapier created the bodies it hangs on) and adds
+/// [`CableSim`] and [`CableState`].
+#[derive(Component, Debug, Clone)]
+pub struct CableDescriptor {
+    /// Unstretched length, m.
+    pub length: f64,
+    /// Number of beam elements (≥ 1).
+    pub segments: usize,
+    /// Section properties (see `cable::preset`).
+    pub section: RopeSection,
+    /// Diameter, m.
+    pub diameter: f64,
+    /// Shear stiffness GA, N (default EA).
+    pub shear_stiffness: Option<f64>,
+    /// Stiffness-proportional damping time constant, s.
+    pub damping: f64,
+    /// Initial centreline (world, m); default straight from start to end, or
+    /// straight down from the start when the end is free or on a body.
+    pub path: Option<Vec<Vec3>>,
+    /// Start anchor (must not be free).
+    pub start: CableAnchor,
+    /// End anchor.
+    pub end: CableAnchor,
+    /// Time integrator.
+    pub scheme: Scheme,
+}
+
+impl CableDescriptor {
+    /// A cable of `length` m with `segments` elements of `section`, from
+    /// `start` to `end`, generalized-α, undamped.
+    pub fn new(length: f64, segments: usize, section: RopeSection, diameter: f64, start: CableAnchor, end: CableAnchor) -> Self {
+        CableDescriptor { length, segments, section, diameter, shear_stiffness: None, damping: 0.0, path: None, start, end, scheme: Scheme::default() }
+    }
+}
+
+/// How the plugin couples a body to a cable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum CarriedBody {
+    /// The body is a link of the cable's chain; rapier mirrors it.
+    Lumped(BodyInChain),
+    /// The body moves the cable's base (fixed or kinematic in rapier).
+    Base,
+    /// The body is dynamic in rapier and receives the end force (explicit).
+    Explicit,
+}
+
+/// Shared pose/velocity of a body that drives a cable base: written by
+/// [`CableSystems::ReadBodies`](super::CableSystems::ReadBodies), read by the
+/// cable's base motion during the step.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct BaseSample {
+    pub t0: f64,
+    pub position: DVec3,
+    pub rotation: glam::DMat3,
+    pub velocity: DVec3,
+    pub angular_velocity: DVec3,
+    pub acceleration: DVec3,
+}
+
+/// The simulated cable (f64 core) and its couplings.
+#[derive(Component, Debug)]
+pub struct CableSim {
+    /// The cable.
+    pub cable: Cable,
+    /// Bodies coupled to the cable and how.
+    pub bodies: Vec<(Entity, CarriedBody)>,
+    /// Base sample shared with the cable's base motion (moving bases).
+    pub(crate) base: Option<(Entity, Vec3, Arc<Mutex<BaseSample>>)>,
+    /// Stopped after a divergence.
+    pub failed: bool,
+}
+
+/// What other systems read about a cable (f32, world frame), refreshed
+/// every fixed step after rapier's writeback.
+#[derive(Component, Debug, Clone, Default)]
+pub struct CableState {
+    /// Node positions (N + 1), m.
+    pub nodes: Vec<Vec3>,
+    /// Axial force of each element joint (N), tension positive.
+    pub tensions: Vec<f32>,
+    /// Stretched length, m.
+    pub stretched_length: f32,
+    /// Kinetic + gravitational + elastic energy, J.
+    pub energy: f64,
+    /// Simulation time of the cable, s.
+    pub time: f64,
+    /// Newton iterations of the last step.
+    pub newton_iterations: usize,
+}
+
+/// Sent when a cable diverges; the cable stops, its last good state stays.
+#[derive(Message, Debug, Clone)]
+pub struct CableDiverged {
+    /// The cable entity.
+    pub entity: Entity,
+    /// Simulation time at the start of the failing step, s.
+    pub time: f64,
+    /// What failed.
+    pub message: String,
+}

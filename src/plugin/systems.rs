@@ -1,0 +1,306 @@
+//! The cable plugin's systems (see the order table in the module docs).
+
+use super::components::{BaseSample, CableAnchor, CableDescriptor, CableDiverged, CableSim, CableState, CarriedBody};
+use super::CableSettings;
+use crate::cable::{BaseMotion, BaseState, BodyInChain, Cable, LinkLoad, LumpedBody, RopeBuilder, RopeEnd, RopeStart};
+use bevy::prelude::*;
+use bevy_rapier3d::prelude::*;
+use bevy_rapier3d::rapier::dynamics::{RigidBody as RapierBody, RigidBodyType};
+use glam::{DMat3, DVec3};
+use std::sync::{Arc, Mutex};
+
+type Target = Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>;
+
+fn pose_of(rb: &RapierBody) -> (DVec3, DMat3) {
+    let p = rb.position();
+    (p.translation.as_dvec3(), DMat3::from_quat(p.rotation.as_dquat()))
+}
+
+fn lumped_of(rb: &RapierBody) -> LumpedBody {
+    let (position, rotation) = pose_of(rb);
+    let mp = &rb.mass_properties().local_mprops;
+    let inertia = mp.reconstruct_inertia_matrix();
+    LumpedBody {
+        mass: mp.mass() as f64,
+        inertia: DMat3::from_cols(inertia.x_axis.as_dvec3(), inertia.y_axis.as_dvec3(), inertia.z_axis.as_dvec3()),
+        position,
+        rotation,
+        com: mp.local_com.as_dvec3(),
+    }
+}
+
+/// A base motion (or anchor target) that follows a shared sample,
+/// extrapolating it with constant acceleration over the step.
+fn follow(sample: Arc<Mutex<BaseSample>>) -> BaseMotion {
+    BaseMotion::Prescribed(Arc::new(move |t| {
+        let s = *sample.lock().unwrap_or_else(|e| e.into_inner());
+        let dt = t - s.t0;
+        BaseState {
+            rotation: s.rotation,
+            position: s.position + s.velocity * dt + 0.5 * s.acceleration * dt * dt,
+            angular_velocity: s.angular_velocity,
+            velocity: s.velocity + s.acceleration * dt,
+            angular_acceleration: DVec3::ZERO,
+            acceleration: s.acceleration,
+        }
+    }))
+}
+
+fn sample_body(rb: &RapierBody, anchor: Vec3) -> BaseSample {
+    let (p, r) = pose_of(rb);
+    let a = r * anchor.as_dvec3();
+    let w = rb.angvel().as_dvec3();
+    let com = rb.center_of_mass().as_dvec3();
+    let v = rb.linvel().as_dvec3() + w.cross(p + a - com);
+    BaseSample { t0: 0.0, position: p + a, rotation: r, velocity: v, angular_velocity: w, acceleration: DVec3::ZERO }
+}
+
+/// Builds cables from new [`CableDescriptor`]s.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn init_cables(
+    mut commands: Commands,
+    new: Query<(Entity, &CableDescriptor), Without<CableSim>>,
+    mut ctx: WriteRapierContext,
+    handles: Query<&RapierRigidBodyHandle>,
+    joints: Query<&ImpulseJoint>,
+    config: Query<&RapierConfiguration>,
+    mut kinds: Query<&mut RigidBody>,
+    mut diverged: MessageWriter<CableDiverged>,
+) {
+    if new.is_empty() {
+        return;
+    }
+    let Ok(mut ctx) = ctx.single_mut() else { return };
+    let gravity = config.iter().next().map_or(DVec3::new(0.0, -9.81, 0.0), |c| c.gravity.as_dvec3());
+    for (entity, d) in &new {
+        let mut fail = |msg: String| {
+            diverged.write(CableDiverged { entity, time: 0.0, message: msg });
+        };
+        let bodies_set = &mut ctx.rigidbody_set.bodies;
+        let body = |e: Entity| handles.get(e).ok().and_then(|h| bodies_set.get(h.0));
+        let mut carried = Vec::new();
+        let mut base_link = None;
+        // Start.
+        let (start, start_point) = match &d.start {
+            CableAnchor::Free => {
+                fail("a free cable start is not supported; attach the start to the world or a body".into());
+                commands.entity(entity).remove::<CableDescriptor>();
+                continue;
+            }
+            CableAnchor::World { point, clamp } => {
+                let b = BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, point.as_dvec3()));
+                (if *clamp { RopeStart::Clamped(b) } else { RopeStart::Pinned(b) }, point.as_dvec3())
+            }
+            CableAnchor::Body { entity: be, anchor, clamp } => {
+                let Some(rb) = body(*be) else {
+                    fail(format!("start body {be} has no rapier rigid body"));
+                    commands.entity(entity).remove::<CableDescriptor>();
+                    continue;
+                };
+                let sample = sample_body(rb, *anchor);
+                let slide = joints.get(*be).ok().and_then(|j| match &j.data {
+                    TypedJoint::PrismaticJoint(pj) => {
+                        let parent = body(j.parent)?;
+                        (parent.body_type() == RigidBodyType::Fixed).then(|| pose_of(parent).1 * pj.local_axis1().as_dvec3())
+                    }
+                    _ => None,
+                });
+                match (rb.body_type(), slide) {
+                    (RigidBodyType::Dynamic, Some(axis)) => {
+                        carried.push((*be, CarriedBody::Lumped(BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO })));
+                        (RopeStart::SlidingBody { body: lumped_of(rb), axis: axis.normalize(), anchor: anchor.as_dvec3(), clamp: *clamp }, sample.position)
+                    }
+                    (kind, _) => {
+                        let shared = Arc::new(Mutex::new(sample));
+                        carried.push((*be, if kind == RigidBodyType::Dynamic { CarriedBody::Explicit } else { CarriedBody::Base }));
+                        base_link = Some((*be, *anchor, shared.clone()));
+                        let b = follow(shared);
+                        (if *clamp { RopeStart::Clamped(b) } else { RopeStart::Pinned(b) }, sample.position)
+                    }
+                }
+            }
+        };
+        // End.
+        let mut end_point = None;
+        let end = match &d.end {
+            CableAnchor::Free => RopeEnd::Free,
+            CableAnchor::World { point, clamp } => {
+                let p = point.as_dvec3();
+                end_point = Some(p);
+                let t: Target = Arc::new(move |_| (p, DVec3::ZERO));
+                if *clamp { RopeEnd::Clamped(t) } else { RopeEnd::Pinned(t) }
+            }
+            CableAnchor::Body { entity: be, anchor, clamp } => {
+                let Some(rb) = body(*be) else {
+                    fail(format!("end body {be} has no rapier rigid body"));
+                    commands.entity(entity).remove::<CableDescriptor>();
+                    continue;
+                };
+                let sample = sample_body(rb, *anchor);
+                end_point = Some(sample.position);
+                if rb.body_type() == RigidBodyType::Dynamic && joints.get(*be).is_err() {
+                    carried.push((*be, CarriedBody::Lumped(BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO })));
+                    RopeEnd::Body { body: lumped_of(rb), anchor: anchor.as_dvec3(), clamp: *clamp }
+                } else if rb.body_type() != RigidBodyType::Fixed {
+                    fail(format!("end body {be}: a cable end on a kinematic body or on a jointed dynamic body is not supported yet"));
+                    commands.entity(entity).remove::<CableDescriptor>();
+                    continue;
+                } else {
+                    let p = sample.position;
+                    let t: Target = Arc::new(move |_| (p, DVec3::ZERO));
+                    if *clamp { RopeEnd::Clamped(t) } else { RopeEnd::Pinned(t) }
+                }
+            }
+        };
+        let path = match (&d.path, end_point) {
+            (Some(p), _) => p.iter().map(|v| v.as_dvec3()).collect(),
+            (None, Some(e)) if !matches!(end, RopeEnd::Body { .. }) => vec![start_point, e],
+            (None, Some(e)) => vec![start_point, e],
+            (None, None) => vec![start_point, start_point - DVec3::Y * d.length],
+        };
+        let mut builder = RopeBuilder::new(d.length, d.segments, d.section, d.diameter)
+            .damping(d.damping)
+            .gravity(gravity)
+            .path(path)
+            .start(start)
+            .end(end);
+        if let Some(ga) = d.shear_stiffness {
+            builder = builder.shear_stiffness(ga);
+        }
+        let model = match builder.build() {
+            Ok(m) => m,
+            Err(e) => {
+                fail(e.to_string());
+                commands.entity(entity).remove::<CableDescriptor>();
+                continue;
+            }
+        };
+        for (_, c) in carried.iter_mut() {
+            if let CarriedBody::Lumped(b) = c {
+                if b.link == usize::MAX {
+                    *b = model.layout.end_body.expect("end body built");
+                }
+            }
+        }
+        let cable = match Cable::new(model, d.scheme.clone()) {
+            Ok(c) => c,
+            Err(e) => {
+                fail(e.to_string());
+                commands.entity(entity).remove::<CableDescriptor>();
+                continue;
+            }
+        };
+        // Bodies the cable carries become kinematic in rapier: the cable moves them.
+        for (be, c) in &carried {
+            if matches!(c, CarriedBody::Lumped(_)) {
+                if let Ok(h) = handles.get(*be) {
+                    if let Some(rb) = ctx.rigidbody_set.bodies.get_mut(h.0) {
+                        rb.set_body_type(RigidBodyType::KinematicPositionBased, true);
+                    }
+                }
+                if let Ok(mut k) = kinds.get_mut(*be) {
+                    *k = RigidBody::KinematicPositionBased;
+                }
+            }
+        }
+        commands.entity(entity).insert((CableSim { cable, bodies: carried, base: base_link, failed: false }, CableState::default()));
+    }
+}
+
+/// Samples the bodies that move cable bases.
+pub(crate) fn read_bodies(mut cables: Query<&mut CableSim>, ctx: ReadRapierContext, handles: Query<&RapierRigidBodyHandle>, time: Res<Time>) {
+    let Ok(ctx) = ctx.single() else { return };
+    let dt = time.delta_secs_f64().max(1e-9);
+    for sim in &mut cables {
+        let Some((be, anchor, shared)) = &sim.base else { continue };
+        let Some(rb) = handles.get(*be).ok().and_then(|h| ctx.rigidbody_set.bodies.get(h.0)) else { continue };
+        let mut s = sample_body(rb, *anchor);
+        let mut guard = shared.lock().unwrap_or_else(|e| e.into_inner());
+        s.t0 = sim.cable.time();
+        if sim.cable.steps > 0 {
+            s.acceleration = (s.velocity - guard.velocity) / dt;
+        }
+        *guard = s;
+    }
+}
+
+/// Advances every cable by the fixed step.
+pub(crate) fn step_cables(
+    mut cables: Query<(Entity, &mut CableSim)>,
+    forces: Query<&ExternalForce>,
+    settings: Res<CableSettings>,
+    time: Res<Time>,
+    mut diverged: MessageWriter<CableDiverged>,
+) {
+    let dt = time.delta_secs_f64();
+    if dt <= 0.0 {
+        return;
+    }
+    let n = settings.substeps.max(1);
+    for (entity, mut sim) in &mut cables {
+        if sim.failed {
+            continue;
+        }
+        let sim = &mut *sim;
+        // User forces on carried bodies act inside the cable solve.
+        sim.cable.model.chain.loads.clear();
+        for (be, c) in &sim.bodies {
+            if let (CarriedBody::Lumped(b), Ok(f)) = (c, forces.get(*be)) {
+                let lm = sim.cable.model.chain.joints[b.link].link.map_or(DVec3::ZERO, |m| m.com);
+                sim.cable.model.chain.loads.push(LinkLoad { link: b.link, force: f.force.as_dvec3(), local_point: lm, moment: f.torque.as_dvec3() });
+            }
+        }
+        for _ in 0..n {
+            let t = sim.cable.time();
+            if let Err(e) = sim.cable.step(dt / n as f64) {
+                sim.failed = true;
+                let message = e.to_string();
+                diverged.write(CableDiverged { entity, time: t, message });
+                break;
+            }
+        }
+    }
+}
+
+/// Moves carried bodies to the cable's pose and gives explicitly coupled
+/// bodies the end force.
+pub(crate) fn write_bodies(cables: Query<&CableSim>, mut ctx: WriteRapierContext, handles: Query<&RapierRigidBodyHandle>, time: Res<Time>) {
+    let Ok(mut ctx) = ctx.single_mut() else { return };
+    let dt = time.delta_secs_f64();
+    for sim in &cables {
+        for (be, c) in &sim.bodies {
+            let Some(rb) = handles.get(*be).ok().and_then(|h| ctx.rigidbody_set.bodies.get_mut(h.0)) else { continue };
+            match c {
+                CarriedBody::Lumped(b) => {
+                    let (p, r, _, _) = sim.cable.model.body_state(b);
+                    let q = glam::DQuat::from_mat3(&r).as_quat();
+                    rb.set_next_kinematic_position(bevy_rapier3d::rapier::math::Pose::from_parts(p.as_vec3(), q));
+                }
+                CarriedBody::Explicit if !sim.failed => {
+                    // The chain pulls its base with the composite load at
+                    // the first sub-joint (spatial force about the origin).
+                    let ch = &sim.cable.model.chain;
+                    let fc = ch.frames[0].fc;
+                    let com = rb.center_of_mass().as_dvec3() - ch.origin;
+                    let moment = fc.top - com.cross(fc.bot);
+                    rb.apply_impulse((fc.bot * dt).as_vec3(), true);
+                    rb.apply_torque_impulse((moment * dt).as_vec3(), true);
+                }
+                _ => {}
+            }
+        }
+    }
+}
+
+/// Refreshes [`CableState`].
+pub(crate) fn readout(mut cables: Query<(&CableSim, &mut CableState)>) {
+    for (sim, mut st) in &mut cables {
+        let c = &sim.cable;
+        st.nodes = c.nodes().iter().map(|p| p.as_vec3()).collect();
+        st.tensions = (0..c.elements()).map(|i| c.element_forces(i).tension as f32).collect();
+        st.stretched_length = c.stretched_length() as f32;
+        st.energy = c.energy();
+        st.time = c.time();
+        st.newton_iterations = c.last_stats.newton_iterations;
+    }
+}

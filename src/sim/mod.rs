@@ -1,0 +1,6 @@
+//! A Bevy-free runner of scenario files: builds the cables (with the bodies
+//! they carry as lumped links) from a validated [`Scenario`](crate::scenario::Scenario),
+//! steps them frame by frame and samples the probes. `cablesim run` uses it;
+//! the Bevy plugin steps the same [`Cable`](crate::cable::Cable)s.
+mod world;
+pub use self::world::{shape_inertia, SimError, World};

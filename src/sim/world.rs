@@ -1,0 +1,404 @@
+//! [`World`]: the cables of a scenario, stepped together.
+//!
+//! ## What maps to what
+//! * A cable end on a `fixed` body, a `kinematic` body (with its `motion`)
+//!   or a world point is the base (start) or an implicit anchor spring (end)
+//!   of that cable's chain.
+//! * A `dynamic` body at a cable's end that no joint and no other cable
+//!   holds (hook, payload) is a lumped link of the chain: a ball joint at
+//!   the anchor (or rigidly clamped), with its mass and full rotary inertia.
+//! * A `dynamic` body at a cable's start that one `prismatic` joint holds to
+//!   the world (a trolley on its rail) is a link of the chain too, behind a
+//!   prismatic sub-joint; a force `drive` on that joint acts on it.
+//!
+//! Anything else (a dynamic body held by several cables or joints, velocity
+//! motors, winches, contact probes, wind and water) is reported as not yet
+//! supported, with the file position, rather than simulated wrongly.
+
+use crate::cable::{
+    BaseMotion, BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeEnd, RopeError,
+    RopeSection, RopeStart,
+};
+use crate::integrate::{Scheme, SchemeParams, Substeps};
+use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, Location, ProbeTarget, Quantity, Scenario, Shape};
+use glam::{DMat3, DQuat, DVec3, EulerRot};
+use std::sync::Arc;
+use thiserror::Error;
+
+/// Why a scenario cannot be run or stopped.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SimError {
+    /// The scenario uses something this runner does not simulate yet.
+    #[error("{file}:{location}: {what} is not supported yet")]
+    Unsupported {
+        /// Scenario file.
+        file: String,
+        /// Where.
+        location: Location,
+        /// What.
+        what: String,
+    },
+    /// A cable could not be built.
+    #[error("{file}:{location}: cable `{cable}`: {source}")]
+    Build {
+        /// Scenario file.
+        file: String,
+        /// Where the cable is defined.
+        location: Location,
+        /// Cable name.
+        cable: String,
+        /// Why.
+        source: RopeError,
+    },
+    /// The integrator setting is invalid.
+    #[error("{file}: [simulation] integrator: {0}", file = .1)]
+    Integrator(String, String),
+    /// A cable diverged or its step failed.
+    #[error("cable `{cable}` failed at t = {time} s: {source}")]
+    Diverged {
+        /// Cable name.
+        cable: String,
+        /// Simulation time at the start of the failing step, s.
+        time: f64,
+        /// What the cable reported.
+        source: CableError,
+    },
+}
+
+/// Rotational inertia (kg·m², body frame, about the centre) of a uniform
+/// solid of mass `mass` (kg) and shape `shape`.
+pub fn shape_inertia(shape: &Shape, mass: f64) -> DMat3 {
+    let d = match *shape {
+        Shape::Ball { radius } => DVec3::splat(0.4 * mass * radius * radius),
+        Shape::Cuboid { half_extents: h } => {
+            DVec3::new(h.y * h.y + h.z * h.z, h.x * h.x + h.z * h.z, h.x * h.x + h.y * h.y) * (mass / 3.0)
+        }
+        Shape::Cylinder { radius: r, half_height: hh } => {
+            let side = mass * (3.0 * r * r + 4.0 * hh * hh) / 12.0;
+            DVec3::new(side, 0.5 * mass * r * r, side)
+        }
+        Shape::Capsule { radius: r, half_height: hh } => {
+            let h = 2.0 * hh;
+            let (vc, vs) = (std::f64::consts::PI * r * r * h, 4.0 / 3.0 * std::f64::consts::PI * r * r * r);
+            let (mc, ms) = (mass * vc / (vc + vs), mass * vs / (vc + vs));
+            let axial = 0.5 * mc * r * r + 0.4 * ms * r * r;
+            let side = mc * (h * h / 12.0 + r * r / 4.0) + ms * (0.4 * r * r + h * h / 4.0 + 3.0 * h * r / 8.0);
+            DVec3::new(side, axial, side)
+        }
+    };
+    DMat3::from_diagonal(d)
+}
+
+/// One simulated cable and the scenario bodies it carries.
+#[derive(Debug)]
+struct SimCable {
+    name: String,
+    cable: Cable,
+    /// Scenario body name → its place in the chain.
+    bodies: Vec<(String, BodyInChain)>,
+    /// Prismatic joint of the start body (joint name, force drive).
+    slide: Option<(String, Option<scenario::TimeSeries>)>,
+}
+
+/// The cables of a scenario, stepped together (see the module docs).
+#[derive(Debug)]
+pub struct World {
+    /// The scenario.
+    pub scenario: Scenario,
+    cables: Vec<SimCable>,
+    /// Simulation time, s.
+    pub time: f64,
+    /// Frames stepped.
+    pub steps: u64,
+    /// Cable sub-steps per frame.
+    pub substeps: u32,
+}
+
+impl World {
+    /// Builds every cable of `scenario` (see the module docs for what is
+    /// supported).
+    pub fn new(scenario: Scenario) -> Result<World, SimError> {
+        let file = scenario.file.display().to_string();
+        let unsupported = |location: Location, what: String| SimError::Unsupported { file: file.clone(), location, what };
+        if let Some(w) = scenario.winches.first() {
+            return Err(unsupported(w.location, format!("winch `{}`", w.name)));
+        }
+        let env = &scenario.environment;
+        if env.wind != DVec3::ZERO || env.water_surface.is_some() {
+            return Err(unsupported(Location { line: 0, col: 0 }, "[environment] wind / water".into()));
+        }
+        for p in &scenario.probes {
+            if matches!(p.quantity, Quantity::ContactForce) || matches!(p.target, ProbeTarget::Winch(_)) {
+                return Err(unsupported(p.location, format!("probe `{}` ({})", p.name, p.quantity.name())));
+            }
+        }
+        let sim = &scenario.simulation;
+        let ic = &sim.integrator;
+        let params = SchemeParams { beta: ic.beta, gamma: ic.gamma, theta: ic.theta, alpha: ic.alpha, rho_inf: ic.rho_inf, w: ic.w };
+        let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
+        let mut cables = Vec::new();
+        for c in &scenario.cables {
+            cables.push(build_cable(&scenario, c, &scheme, &file)?);
+        }
+        // Every dynamic body must be carried by exactly one cable.
+        for b in scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
+            let holders = cables.iter().filter(|c| c.bodies.iter().any(|(n, _)| *n == b.name)).count();
+            if holders != 1 {
+                return Err(unsupported(
+                    b.location,
+                    format!("dynamic body `{}` held by {holders} cables (this runner simulates dynamic bodies carried by exactly one cable)", b.name),
+                ));
+            }
+        }
+        for j in &scenario.joints {
+            let carried = cables.iter().any(|c| c.slide.as_ref().is_some_and(|(n, _)| *n == j.name));
+            let static_bodies = [&j.body1, &j.body2].iter().all(|n| {
+                *n == "world" || scenario.body(n).is_some_and(|b| b.kind != BodyKind::Dynamic)
+            });
+            if !carried && !static_bodies {
+                return Err(unsupported(j.location, format!("joint `{}` between dynamic bodies", j.name)));
+            }
+        }
+        let substeps = sim.substeps.unwrap_or(1);
+        for c in &mut cables {
+            if !scheme.is_explicit() {
+                c.cable.integrator.substeps = Substeps::Auto;
+            }
+        }
+        Ok(World { scenario, cables, time: 0.0, steps: 0, substeps })
+    }
+
+    /// Advances every cable by one frame `dt` (in `substeps` sub-steps).
+    pub fn step(&mut self) -> Result<(), SimError> {
+        let dt = self.scenario.simulation.dt;
+        let h = dt / self.substeps as f64;
+        for c in &mut self.cables {
+            for k in 0..self.substeps {
+                let t = self.time + k as f64 * h;
+                if let Some((_, Some(force))) = &c.slide {
+                    // Drive force at the sub-step's midpoint.
+                    c.cable.model.chain.joint_forces[0] = force.value_at(t + 0.5 * h);
+                }
+                c.cable.step(h).map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source })?;
+            }
+        }
+        self.steps += 1;
+        self.time = self.steps as f64 * dt;
+        Ok(())
+    }
+
+    /// The cable named `name`.
+    pub fn cable(&self, name: &str) -> Option<&Cable> {
+        self.cables.iter().find(|c| c.name == name).map(|c| &c.cable)
+    }
+
+    /// Appends the current value of every probe column (file order) to `out`.
+    pub fn sample(&self, out: &mut Vec<f64>) {
+        out.clear();
+        for p in &self.scenario.probes {
+            let value = self.probe(p);
+            match (value, p.component) {
+                (Probe::Scalar(x), _) => out.push(x),
+                (Probe::Vector(v), None) => out.extend([v.x, v.y, v.z]),
+                (Probe::Vector(v), Some(c)) => out.push(match c {
+                    Component::X => v.x,
+                    Component::Y => v.y,
+                    Component::Z => v.z,
+                    Component::Norm => v.length(),
+                }),
+            }
+        }
+    }
+
+    fn body_state(&self, name: &str) -> (DVec3, DMat3, DVec3, DVec3) {
+        for c in &self.cables {
+            if let Some((_, b)) = c.bodies.iter().find(|(n, _)| n == name) {
+                return c.cable.model.body_state(b);
+            }
+        }
+        let b = self.scenario.body(name).expect("probe targets are validated");
+        let v = b.motion.as_ref().map_or(DVec3::ZERO, |m| m.velocity_at(self.time));
+        (b.position_at(self.time), DMat3::from_quat(b.rotation), v, DVec3::ZERO)
+    }
+
+    fn probe(&self, p: &scenario::Probe) -> Probe {
+        match &p.target {
+            ProbeTarget::System => {
+                let e = |f: fn(&Cable) -> f64| self.cables.iter().map(|c| f(&c.cable)).sum::<f64>();
+                match p.quantity {
+                    Quantity::KineticEnergy => Probe::Scalar(e(Cable::kinetic_energy)),
+                    _ => Probe::Scalar(e(Cable::energy)),
+                }
+            }
+            ProbeTarget::Body(name) => {
+                let (pos, rot, vel, w) = self.body_state(name);
+                Probe::Vector(match p.quantity {
+                    Quantity::Position => pos,
+                    Quantity::Velocity => vel,
+                    Quantity::Rotation => {
+                        let (x, y, z) = DQuat::from_mat3(&rot).to_euler(EulerRot::XYZ);
+                        DVec3::new(x, y, z) * (180.0 / std::f64::consts::PI)
+                    }
+                    _ => w * (180.0 / std::f64::consts::PI),
+                })
+            }
+            ProbeTarget::Cable(name) => {
+                let c = self.cable(name).expect("probe targets are validated");
+                let s = p.s.unwrap_or(0.0);
+                match p.quantity {
+                    Quantity::Position => Probe::Vector(c.point_at(s).0),
+                    Quantity::Velocity => Probe::Vector(c.point_at(s).1),
+                    Quantity::Tension => Probe::Scalar(c.tension_at(s)),
+                    _ => Probe::Scalar(c.stretched_length()),
+                }
+            }
+            ProbeTarget::Joint(name) => {
+                let c = self.cables.iter().find(|c| c.slide.as_ref().is_some_and(|(n, _)| n == name));
+                match (c, p.quantity) {
+                    (Some(c), Quantity::Position) => Probe::Scalar(c.cable.state.q[0]),
+                    (Some(c), Quantity::Velocity) => Probe::Scalar(c.cable.state.v[0]),
+                    (Some(c), _) => {
+                        let axis = c.cable.model.chain.link_rotation(0) * c.cable.model.chain.joints[0].axis;
+                        Probe::Vector(axis * c.cable.model.chain.joint_forces[0])
+                    }
+                    (None, Quantity::Force) => Probe::Vector(DVec3::NAN),
+                    (None, _) => Probe::Scalar(0.0),
+                }
+            }
+            ProbeTarget::Winch(_) => Probe::Scalar(f64::NAN),
+        }
+    }
+
+    /// Names of the cables.
+    pub fn cable_names(&self) -> Vec<&str> {
+        self.cables.iter().map(|c| c.name.as_str()).collect()
+    }
+
+    /// Newton iterations, residual evaluations and solves of all cables so far.
+    pub fn work(&self) -> (usize, usize) {
+        self.cables.iter().fold((0, 0), |(a, b), c| (a + c.cable.total_stats.newton_iterations, b + c.cable.total_stats.solves))
+    }
+}
+
+enum Probe {
+    Scalar(f64),
+    Vector(DVec3),
+}
+
+fn lumped(b: &scenario::Body) -> LumpedBody {
+    let mass = b.mass.unwrap_or(0.0);
+    LumpedBody { mass, inertia: shape_inertia(&b.shape, mass), position: b.position, rotation: DMat3::from_quat(b.rotation), com: DVec3::ZERO }
+}
+
+/// Base motion of a point `anchor` of a fixed or kinematic body.
+fn body_base(b: &scenario::Body, anchor: DVec3) -> BaseMotion {
+    let rot = DMat3::from_quat(b.rotation);
+    let offset = rot * anchor;
+    match &b.motion {
+        None => BaseMotion::Fixed(BaseState::fixed(rot, b.position + offset)),
+        Some(m) => {
+            let (m, base) = (m.clone(), b.position);
+            BaseMotion::Prescribed(Arc::new(move |t| {
+                let eps = 1e-5;
+                let acc = (m.velocity_at(t + eps) - m.velocity_at(t - eps)) / (2.0 * eps);
+                BaseState {
+                    rotation: rot,
+                    position: m.position_at(t, base) + offset,
+                    angular_velocity: DVec3::ZERO,
+                    velocity: m.velocity_at(t),
+                    angular_acceleration: DVec3::ZERO,
+                    acceleration: acc,
+                }
+            }))
+        }
+    }
+}
+
+fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) -> Result<SimCable, SimError> {
+    let unsupported = |what: String| SimError::Unsupported { file: file.to_string(), location: c.location, what };
+    let section = RopeSection {
+        linear_density: c.linear_density,
+        ea: c.ea,
+        ei: c.ei,
+        ei2: c.ei2,
+        gj: c.gj,
+        min_breaking_load: 0.0,
+    };
+    let mut builder = RopeBuilder::new(c.length, c.segments as usize, section, c.diameter)
+        .damping(c.damping)
+        .gravity(sc.simulation.gravity)
+        .path(c.path.clone());
+    if let Some(ga) = c.shear_stiffness {
+        builder = builder.shear_stiffness(ga);
+    }
+    let mut bodies = Vec::new();
+    let mut slide = None;
+    builder = match &c.start {
+        CableEnd::Free => return Err(unsupported(format!("cable `{}` with a free start", c.name))),
+        CableEnd::World { point, clamp } => {
+            let base = BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, *point));
+            builder.start(if *clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) })
+        }
+        CableEnd::Body { body, anchor, clamp } => {
+            let b = sc.body(body).expect("validated");
+            if b.kind == BodyKind::Dynamic {
+                let joint = sc.joints.iter().find(|j| {
+                    j.kind == scenario::JointKind::Prismatic
+                        && ((j.body1 == "world" && j.body2 == *body) || (j.body2 == "world" && j.body1 == *body))
+                });
+                let Some(j) = joint else {
+                    return Err(unsupported(format!(
+                        "cable `{}` starting on dynamic body `{body}` that no prismatic joint holds to the world",
+                        c.name
+                    )));
+                };
+                let axis = j.axis.unwrap_or(DVec3::X);
+                let force = match &j.drive {
+                    None => None,
+                    Some(Drive::Force { force }) => Some(force.clone()),
+                    Some(Drive::Velocity { .. }) => return Err(SimError::Unsupported { file: file.to_string(), location: j.location, what: format!("velocity drive of joint `{}`", j.name) }),
+                };
+                slide = Some((j.name.clone(), force));
+                bodies.push((body.clone(), BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
+                builder.start(RopeStart::SlidingBody { body: lumped(b), axis, anchor: *anchor, clamp: *clamp })
+            } else {
+                let base = body_base(b, *anchor);
+                builder.start(if *clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) })
+            }
+        }
+    };
+    builder = match &c.end {
+        CableEnd::Free => builder,
+        CableEnd::World { point, clamp } => {
+            let p = *point;
+            let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |_| (p, DVec3::ZERO));
+            builder.end(if *clamp { RopeEnd::Clamped(target) } else { RopeEnd::Pinned(target) })
+        }
+        CableEnd::Body { body, anchor, clamp } => {
+            let b = sc.body(body).expect("validated");
+            if b.kind == BodyKind::Dynamic {
+                if sc.joints.iter().any(|j| j.body1 == *body || j.body2 == *body) {
+                    return Err(unsupported(format!("cable `{}` ending on body `{body}` that a joint also holds", c.name)));
+                }
+                bodies.push((body.clone(), BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
+                builder.end(RopeEnd::Body { body: lumped(b), anchor: *anchor, clamp: *clamp })
+            } else {
+                let (b, a) = (b.clone(), *anchor);
+                let rot = DMat3::from_quat(b.rotation);
+                let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |t| {
+                    let v = b.motion.as_ref().map_or(DVec3::ZERO, |m| m.velocity_at(t));
+                    (b.position_at(t) + rot * a, v)
+                });
+                builder.end(if *clamp { RopeEnd::Clamped(target) } else { RopeEnd::Pinned(target) })
+            }
+        }
+    };
+    let model = builder.build().map_err(|source| SimError::Build { file: file.to_string(), location: c.location, cable: c.name.clone(), source })?;
+    // Fix up the end body's place now that the chain exists.
+    if let Some((_, b)) = bodies.iter_mut().find(|(_, b)| b.link == usize::MAX) {
+        *b = model.layout.end_body.expect("end body built");
+    }
+    let cable = Cable::new(model, scheme.clone())
+        .map_err(|source| SimError::Diverged { cable: c.name.clone(), time: 0.0, source })?;
+    Ok(SimCable { name: c.name.clone(), cable, bodies, slide })
+}

@@ -1,0 +1,61 @@
+//! The shipped scenarios (assets/scenarios) run through the Bevy-free
+//! runner and meet their closed forms.
+
+use bevy_rapier_cable::scenario;
+use bevy_rapier_cable::sim::World;
+use std::path::Path;
+
+fn run(file: &str) -> (World, Vec<Vec<f64>>) {
+    let sc = scenario::load(Path::new(file)).unwrap_or_else(|e| panic!("{e}"));
+    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
+    let frames = (world.scenario.simulation.duration / world.scenario.simulation.dt).round() as u64;
+    let mut rows = Vec::new();
+    let mut row = Vec::new();
+    for _ in 0..frames {
+        world.step().unwrap_or_else(|e| panic!("{e}"));
+        world.sample(&mut row);
+        let mut r = vec![world.time];
+        r.extend(&row);
+        rows.push(r);
+    }
+    (world, rows)
+}
+
+#[test]
+fn every_shipped_scenario_is_valid_and_builds() {
+    let mut n = 0;
+    for entry in std::fs::read_dir("assets/scenarios").unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let sc = scenario::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            World::new(sc).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            n += 1;
+        }
+    }
+    assert!(n >= 3);
+}
+
+/// verification-cases §5b from a scenario file: joint position probe.
+#[test]
+fn trolley_pendulum_scenario_matches_closed_form() {
+    let (_, rows) = run("assets/scenarios/trolley_pendulum.toml");
+    let x: Vec<f64> = rows.iter().map(|r| r[1]).collect();
+    let t: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+    // Period from maxima of the trolley position.
+    let peaks: Vec<f64> = (1..x.len() - 1).filter(|&k| x[k] > x[k - 1] && x[k] >= x[k + 1]).map(|k| t[k]).collect();
+    let period = (peaks[peaks.len() - 1] - peaks[0]) / (peaks.len() - 1) as f64;
+    let p2p = x.iter().cloned().fold(f64::MIN, f64::max) - x.iter().cloned().fold(f64::MAX, f64::min);
+    println!("period {period:.5} s (3.843178), trolley peak-to-peak {p2p:.5} m (1.666667)");
+    assert!((period - 3.843178).abs() / 3.843178 < 2e-3);
+    assert!((p2p - 1.666667).abs() / 1.666667 < 5e-3);
+}
+
+/// verification-cases §3c and the dynamic load factor from a scenario file.
+#[test]
+fn axial_bounce_scenario_dynamic_load_factor() {
+    let (_, rows) = run("assets/scenarios/axial_bounce.toml");
+    let peak = rows.iter().map(|r| r[2]).fold(f64::MIN, f64::max);
+    let dlf = peak / (5000.0 * 9.81);
+    println!("peak tension at the payload {peak:.0} N, DLF {dlf:.4}");
+    assert!((dlf - 2.0).abs() < 0.02);
+}
