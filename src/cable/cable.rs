@@ -1,6 +1,7 @@
 //! [`Cable`]: a rope model with its integrator state, stepped in time, with
 //! the queries users read (node positions, tension, moments, energy).
 
+use super::chain::LinkLoad;
 use super::rope::{RopeModel, ELEMENT_DOFS};
 use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
 use glam::DVec3;
@@ -200,6 +201,37 @@ impl Cable {
     /// Total mechanical energy: kinetic + gravitational + elastic, J.
     pub fn energy(&self) -> f64 {
         self.kinetic_energy() + self.gravity_energy() + self.elastic_energy()
+    }
+
+    /// Removes every external load (point and distributed).
+    pub fn clear_loads(&mut self) {
+        self.model.chain.loads.clear();
+    }
+
+    /// Adds a point force (N, world frame) at arc length `s` (m, along the
+    /// unstretched rope). Loads keep their direction over a step (their
+    /// moment-arm change is in the implicit tangent) and stay until
+    /// [`Cable::clear_loads`].
+    pub fn add_point_load(&mut self, s: f64, force: DVec3) {
+        let l = &self.model.layout;
+        let (i, f) = self.locate(s);
+        let link = l.element_link(i);
+        self.model.chain.loads.push(LinkLoad { link, force, local_point: DVec3::new(f * l.element_length, 0.0, 0.0), moment: DVec3::ZERO });
+    }
+
+    /// Adds a distributed load: `load(element, midpoint, midpoint velocity)`
+    /// returns the force per unit length (N/m, world frame) on that element,
+    /// applied at its midpoint over its unstretched length (contact, wind and
+    /// water use this).
+    pub fn add_distributed_load(&mut self, mut load: impl FnMut(usize, DVec3, DVec3) -> DVec3) {
+        let l = self.model.layout;
+        let mid = DVec3::new(0.5 * l.element_length, 0.0, 0.0);
+        for i in 0..l.elements {
+            let link = l.element_link(i);
+            let (p, v) = (self.model.chain.link_point(link, mid), self.model.chain.link_point_velocity(link, mid));
+            let force = load(i, p, v) * l.element_length;
+            self.model.chain.loads.push(LinkLoad { link, force, local_point: mid, moment: DVec3::ZERO });
+        }
     }
 
     /// Number of elements.
