@@ -59,6 +59,14 @@ impl Cable {
     pub fn new(model: RopeModel, scheme: Scheme) -> Result<Self, CableError> {
         let mut model = model;
         let n = model.q0.len();
+        if scheme.is_explicit() {
+            // Explicit schemes size their sub-steps from the highest
+            // frequency: measure it (power iteration on M⁻¹K, +20 %), and keep
+            // the builder's analytic bound (which covers tension growth).
+            let measured = model.chain.estimate_max_frequency(0.0, &model.q0, 60).map_err(|source| IntegrateError::System { t: 0.0, source })?;
+            let analytic = model.chain.max_frequency.unwrap_or(0.0);
+            model.chain.max_frequency = Some((1.2 * measured).max(analytic));
+        }
         let state = State::new(&mut model.chain, 0.0, model.q0.clone(), vec![0.0; n])?;
         let mut c = Cable {
             model,

@@ -560,3 +560,37 @@ impl Chain {
         Err(StaticError::NotConverged { iterations: max_iterations, residual: last_norm })
     }
 }
+
+impl Chain {
+    /// Estimates the highest natural angular frequency (rad/s) of the chain
+    /// linearised at `(t, q)` at rest: power iteration on `M⁻¹ K_t`, with
+    /// `K_t x` from central differences of the residual and `M⁻¹` from the
+    /// O(n) solve (O(n) per iteration). Used to choose explicit sub-steps.
+    pub fn estimate_max_frequency(&mut self, t: f64, q: &[f64], iterations: usize) -> Result<f64, SystemError> {
+        let n = self.len();
+        let zero = vec![0.0; n];
+        let (mut rp, mut rm, mut y) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        // Deterministic start vector with every coordinate present.
+        let mut x: Vec<f64> = (0..n).map(|i| 1.0 + 0.5 * ((i as f64) * 0.7548776662).fract()).collect();
+        let mut lambda: f64 = 0.0;
+        for _ in 0..iterations {
+            let norm = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            if norm == 0.0 || !norm.is_finite() {
+                break;
+            }
+            x.iter_mut().for_each(|v| *v /= norm);
+            let eps = 1e-7;
+            let qp: Vec<f64> = q.iter().zip(&x).map(|(a, b)| a + eps * b).collect();
+            let qm: Vec<f64> = q.iter().zip(&x).map(|(a, b)| a - eps * b).collect();
+            self.residual_into(t, &qp, &zero, &zero, &mut rp)?;
+            self.residual_into(t, &qm, &zero, &zero, &mut rm)?;
+            let kx: Vec<f64> = rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * eps)).collect();
+            self.residual_into(t, q, &zero, &zero, &mut rp)?;
+            self.solve_into(0.0, 0.0, &kx, &mut y)?;
+            let ny = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            lambda = ny;
+            std::mem::swap(&mut x, &mut y);
+        }
+        Ok(lambda.max(0.0).sqrt())
+    }
+}
