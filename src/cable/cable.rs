@@ -87,7 +87,17 @@ impl Cable {
         self.last_stats = stats;
         self.total_stats += stats;
         self.steps += 1;
-        self.refresh();
+        // Newton schemes last evaluated the residual at their converged
+        // iterate (within the position tolerance of the final state): the
+        // chain's kinematics are current. Other schemes last evaluated an
+        // intermediate stage.
+        let newton_converged = matches!(
+            self.integrator.scheme,
+            Scheme::GeneralizedAlpha { .. } | Scheme::Hht { .. } | Scheme::Newmark { .. } | Scheme::LinearAcceleration
+        ) && stats.substeps_used == 1;
+        if !newton_converged {
+            self.refresh();
+        }
         self.check_sanity()?;
         Ok(stats)
     }

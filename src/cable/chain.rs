@@ -188,22 +188,28 @@ pub(crate) struct Frame {
     pub acc: V6,
     /// Composite load on this link and everything outboard (spatial force).
     pub fc: V6,
-    /// Link spatial inertia (zero for massless links).
-    pub inertia: M6,
-    /// Geometric stiffness block `B_s`.
-    pub b: M6,
-    /// Anchor-spring stiffness and damping on this link (spatial, world).
-    pub k_anchor: M6,
-    /// Anchor-spring damping.
-    pub c_anchor: M6,
-    /// Loads on this link alone (spatial force).
-    pub lf: V6,
-    /// Load tangent `Σ B̃` of this link's loads.
-    pub lh: M6,
+    /// `G_s S_s`: the geometric-stiffness term the solve needs (see
+    /// [`Chain::solve_into`]).
+    pub gs: V6,
     /// ABA scratch: `U = I^A S`, `D`, `u`.
     pub u_vec: V6,
     pub d: f64,
     pub u: f64,
+}
+
+/// Scratch of a link with mass or with loads (a few per element at most).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct LinkScratch {
+    /// Spatial inertia (zero for massless links).
+    pub inertia: M6,
+    /// Loads on this link alone (spatial force).
+    pub f: V6,
+    /// Load tangent `Σ B̃` of this link's loads.
+    pub h: M6,
+    /// Implicit stiffness and damping of anchor springs on this link.
+    pub k_anchor: M6,
+    pub c_anchor: M6,
+    pub anchored: bool,
 }
 
 /// A serial chain of one-DOF sub-joints (see the module docs).
@@ -225,6 +231,13 @@ pub struct Chain {
     pub loads: Vec<LinkLoad>,
     /// Generalized forces on the sub-joints (drives), N or N·m.
     pub joint_forces: Vec<f64>,
+    /// For each sub-joint, the index of its link's scratch in `links`
+    /// (links with mass, loads or anchors), or `u32::MAX`.
+    pub(crate) link_slot: Vec<u32>,
+    pub(crate) links: Vec<LinkScratch>,
+    /// Newton tolerance on the coordinate corrections, m or rad (default
+    /// 1e-9: a thousandth of a 2 cm steel element's stretch under load).
+    pub position_tolerance: f64,
     /// Upper estimate of the highest natural frequency, rad/s (for explicit
     /// schemes' sub-steps); `None` if unknown.
     pub max_frequency: Option<f64>,
@@ -249,9 +262,31 @@ impl Chain {
             anchors: Vec::new(),
             loads: Vec::new(),
             joint_forces: vec![0.0; n],
+            link_slot: vec![u32::MAX; n],
+            links: Vec::new(),
             max_frequency: None,
+            position_tolerance: 1e-9,
             frames: vec![Frame::default(); n],
         }
+    }
+
+    /// Assigns link scratch slots to links with mass, loads or anchors
+    /// (called by every residual evaluation; allocation-free once sized).
+    fn assign_slots(&mut self) {
+        let n = self.joints.len();
+        self.link_slot.resize(n, u32::MAX);
+        let mut count = 0u32;
+        for s in 0..n {
+            let used = self.joints[s].link.is_some();
+            self.link_slot[s] = if used { count += 1; count - 1 } else { u32::MAX };
+        }
+        for s in self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)) {
+            if s < n && self.link_slot[s] == u32::MAX {
+                self.link_slot[s] = count;
+                count += 1;
+            }
+        }
+        self.links.resize(count as usize, LinkScratch::default());
     }
 
     /// Number of sub-joints (= generalized coordinates).
@@ -277,11 +312,11 @@ impl Chain {
         let mut prev_pos = bp;
         for (s, j) in self.joints.iter().enumerate() {
             let fr = &mut self.frames[s];
-            let rj = prev_rot * j.pre_rotation;
-            let pj = prev_pos + prev_rot * j.offset;
+            let rj = if j.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * j.pre_rotation };
+            let pj = if j.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * j.offset };
             let aw = rj * j.axis;
             let (sv, rot, pos) = match j.kind {
-                JointKind::Revolute => (V6::new(aw, pj.cross(aw)), rj * DMat3::from_axis_angle(j.axis, q[s]), pj),
+                JointKind::Revolute => (V6::new(aw, pj.cross(aw)), rotate_about(rj, j.axis, q[s]), pj),
                 JointKind::Prismatic => (V6::new(DVec3::ZERO, aw), rj, pj + aw * q[s]),
             };
             let vel = prev_vel + sv * v[s];
@@ -336,14 +371,16 @@ impl Chain {
         }
         self.kinematics(t, q, v, a);
         let n = self.joints.len();
+        self.assign_slots();
         // Loads per link: d'Alembert + gravity at the centre of mass.
         for s in 0..n {
-            let fr = &mut self.frames[s];
-            fr.lf = V6::ZERO;
-            fr.lh = M6::ZERO;
-            fr.k_anchor = M6::ZERO;
-            fr.c_anchor = M6::ZERO;
-            fr.inertia = M6::ZERO;
+            let slot = self.link_slot[s];
+            if slot == u32::MAX {
+                continue;
+            }
+            let fr = &self.frames[s];
+            let ls = &mut self.links[slot as usize];
+            *ls = LinkScratch::default();
             if let Some(lm) = &self.joints[s].link {
                 let c = fr.pos + fr.rot * lm.com;
                 let ic = fr.rot * lm.inertia * fr.rot.transpose();
@@ -353,19 +390,21 @@ impl Chain {
                 let ac = fr.acc.bot + alpha.cross(c) + w.cross(vc);
                 let force = (self.gravity - ac) * lm.mass;
                 let moment = -(ic * alpha + w.cross(ic * w));
-                fr.lf += V6::new(c.cross(force) + moment, force);
-                fr.lh += M6::point_load_tangent(force, c);
-                fr.inertia = M6::inertia(lm.mass, c, ic);
+                ls.f = V6::new(c.cross(force) + moment, force);
+                ls.h = M6::point_load_tangent(force, c);
+                ls.inertia = M6::inertia(lm.mass, c, ic);
             }
         }
         for ld in &self.loads {
-            let fr = &mut self.frames[ld.link];
+            let fr = &self.frames[ld.link];
+            let ls = &mut self.links[self.link_slot[ld.link] as usize];
             let p = fr.pos + fr.rot * ld.local_point;
-            fr.lf += V6::new(p.cross(ld.force) + ld.moment, ld.force);
-            fr.lh += M6::point_load_tangent(ld.force, p);
+            ls.f += V6::new(p.cross(ld.force) + ld.moment, ld.force);
+            ls.h += M6::point_load_tangent(ld.force, p);
         }
         for an in &self.anchors {
-            let fr = &mut self.frames[an.link];
+            let fr = &self.frames[an.link];
+            let ls = &mut self.links[self.link_slot[an.link] as usize];
             let p = fr.pos + fr.rot * an.local_point;
             let pv = fr.vel.bot + fr.vel.top.cross(p);
             let (target, target_v) = (an.target)(t);
@@ -373,41 +412,51 @@ impl Chain {
             let mut moment = DVec3::ZERO;
             let px = skew(p);
             let k_point = M6 { a: px * px.transpose(), b: px, c: px.transpose(), d: DMat3::IDENTITY };
-            fr.k_anchor += k_point.scale(an.stiffness);
-            fr.c_anchor += k_point.scale(an.damping);
+            ls.anchored = true;
+            ls.k_anchor += k_point.scale(an.stiffness);
+            ls.c_anchor += k_point.scale(an.damping);
             if let Some((rt, kr, cr)) = an.rotation {
                 let err = DQuat::from_mat3(&(fr.rot * rt.transpose())).to_scaled_axis();
                 moment = -err * kr - fr.vel.top * cr;
                 let rot_block = |k: f64| M6 { a: DMat3::from_diagonal(DVec3::splat(k)), b: DMat3::ZERO, c: DMat3::ZERO, d: DMat3::ZERO };
-                fr.k_anchor += rot_block(kr);
-                fr.c_anchor += rot_block(cr);
+                ls.k_anchor += rot_block(kr);
+                ls.c_anchor += rot_block(cr);
             }
-            fr.lf += V6::new(p.cross(force) + moment, force);
-            fr.lh += M6::point_load_tangent(force, p);
+            ls.f += V6::new(p.cross(force) + moment, force);
+            ls.h += M6::point_load_tangent(force, p);
         }
         // Tip-to-base sweep: composite loads, residual, geometric stiffness.
         let mut fc = V6::ZERO;
         let mut h = M6::ZERO;
-        let mut g_next = M6::ZERO;
+        let mut h_sym = M6::ZERO;
         for s in (0..n).rev() {
             let j = &self.joints[s];
             let fr = &mut self.frames[s];
-            fc += fr.lf;
-            h += fr.lh;
+            let slot = self.link_slot[s];
+            if slot != u32::MAX {
+                let ls = &self.links[slot as usize];
+                fc += ls.f;
+                h += ls.h;
+                h_sym = (h + h.transpose()).scale(0.5);
+            }
             fr.fc = fc;
             r[s] = -fr.s.dot(fc) + j.stiffness * (q[s] - j.rest) + j.damping * v[s] - self.joint_forces[s];
-            let av = M6::fbar(fc).mul_vec(fr.s);
-            let z = fr.s * (1.0 / fr.s.dot(fr.s));
-            let sym = (M6::outer(av, z) + M6::outer(z, av)).scale(0.5);
-            let g = (h + h.transpose()).scale(0.5) + sym;
-            fr.b = g_next - g;
-            g_next = g;
+            // G_s = ½(H + Hᵀ) + ½(a zᵀ + z aᵀ), a = F̄(f^c) S = S ×* f^c,
+            // zᵀS = 1, aᵀS = 0, so G_s S_s = ½(H + Hᵀ) S + ½ S ×* f^c.
+            fr.gs = h_sym.mul_vec(fr.s) + fr.s.cross_force(fc) * 0.5;
         }
         Ok(())
     }
 
     /// Solves `(M + c_v C + c_q (K + K_g)) x = b` at the state of the last
     /// [`Chain::residual_into`] call, in O(n).
+    ///
+    /// The geometric stiffness is `K_g = Σ J_sᵀ B_s J_s` with
+    /// `B_s = G_{s+1} − G_s`, so link `s` carries `I_s + c_q (G_{s+1} − G_s)`.
+    /// The sweep runs on the shifted articulated inertia
+    /// `Ĩ_s = I^A_s + c_q G_s`, which obeys the plain recursion
+    /// `Ĩ_s = I_s + Ĩ_{s+1} − U_{s+1} U_{s+1}ᵀ / D_{s+1}`, and needs `G_s` only
+    /// through `U_s = Ĩ_s S_s − c_q G_s S_s`: no 6×6 geometric block is formed.
     pub fn solve_into(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         let n = self.joints.len();
         let mut carry_i = M6::ZERO;
@@ -415,20 +464,28 @@ impl Chain {
         for s in (0..n).rev() {
             let j = &self.joints[s];
             let fr = &mut self.frames[s];
-            let ia = fr.inertia + (fr.b + fr.k_anchor).scale(c_q) + fr.c_anchor.scale(c_v) + carry_i;
-            let uv = ia.mul_vec(fr.s);
+            let slot = self.link_slot[s];
+            if slot != u32::MAX {
+                let ls = &self.links[slot as usize];
+                carry_i += ls.inertia;
+                if ls.anchored {
+                    carry_i.add_scaled(&ls.k_anchor, c_q);
+                    carry_i.add_scaled(&ls.c_anchor, c_v);
+                }
+            }
+            let uv = carry_i.mul_vec(fr.s) - fr.gs * c_q;
             let armature = c_v * j.damping + c_q * j.stiffness;
             let d = fr.s.dot(uv) + armature;
             // The effective matrix may be indefinite (compression, large c_q);
             // only a vanishing pivot is fatal.
-            if !d.is_finite() || d.abs() <= 1e-13 * (fr.inertia.max_abs() + armature.abs()) {
+            if !d.is_finite() || d.abs() <= 1e-14 * (fr.s.dot(fr.s).sqrt() * uv.dot(uv).sqrt() + armature.abs()) {
                 return Err(SystemError::Singular { index: s, pivot: d });
             }
             let u = b[s] - fr.s.dot(carry_p);
             fr.u_vec = uv;
             fr.d = d;
             fr.u = u;
-            carry_i = ia - M6::outer(uv, uv).scale(1.0 / d);
+            carry_i.add_outer(uv, uv, -1.0 / d);
             carry_p = carry_p + uv * (u / d);
         }
         let mut acc = V6::ZERO;
@@ -443,7 +500,18 @@ impl Chain {
 
     /// Kinetic energy at the last kinematics evaluation, J.
     pub fn kinetic_energy(&self) -> f64 {
-        self.frames.iter().map(|fr| 0.5 * fr.vel.dot(fr.inertia.mul_vec(fr.vel))).sum()
+        self.joints
+            .iter()
+            .zip(&self.frames)
+            .filter_map(|(j, fr)| {
+                j.link.map(|lm| {
+                    let c = fr.pos + fr.rot * lm.com;
+                    let w = fr.vel.top;
+                    let vc = fr.vel.bot + w.cross(c);
+                    0.5 * lm.mass * vc.length_squared() + 0.5 * w.dot(fr.rot * (lm.inertia * (fr.rot.transpose() * w)))
+                })
+            })
+            .sum()
     }
 
     /// Gravitational potential energy `−Σ m g·c` at the last kinematics
@@ -486,7 +554,22 @@ impl SecondOrderSystem for Chain {
         self.max_frequency
     }
     fn position_tolerance(&self) -> f64 {
-        1e-11
+        self.position_tolerance
+    }
+}
+
+/// `r · R(axis, angle)` for a unit axis; fast paths for the principal axes.
+#[inline]
+fn rotate_about(r: DMat3, axis: DVec3, angle: f64) -> DMat3 {
+    let (sn, cs) = angle.sin_cos();
+    if axis == DVec3::X {
+        DMat3::from_cols(r.x_axis, r.y_axis * cs + r.z_axis * sn, r.z_axis * cs - r.y_axis * sn)
+    } else if axis == DVec3::Y {
+        DMat3::from_cols(r.x_axis * cs - r.z_axis * sn, r.y_axis, r.x_axis * sn + r.z_axis * cs)
+    } else if axis == DVec3::Z {
+        DMat3::from_cols(r.x_axis * cs + r.y_axis * sn, r.y_axis * cs - r.x_axis * sn, r.z_axis)
+    } else {
+        r * DMat3::from_axis_angle(axis, angle)
     }
 }
 

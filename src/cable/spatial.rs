@@ -150,6 +150,30 @@ impl M6 {
         let fx = skew(force);
         M6 { a: fx * skew(c), b: -fx, c: DMat3::ZERO, d: DMat3::ZERO }
     }
+    /// `self += other · s`.
+    #[inline]
+    pub fn add_scaled(&mut self, o: &M6, s: f64) {
+        self.a += o.a * s;
+        self.b += o.b * s;
+        self.c += o.c * s;
+        self.d += o.d * s;
+    }
+    /// `self += s · u wᵀ`.
+    #[inline]
+    pub fn add_outer(&mut self, u: V6, w: V6, s: f64) {
+        let (ut, ub) = (u.top * s, u.bot * s);
+        self.a += outer3(ut, w.top);
+        self.b += outer3(ut, w.bot);
+        self.c += outer3(ub, w.top);
+        self.d += outer3(ub, w.bot);
+    }
+    /// `½(u wᵀ + w uᵀ)`.
+    #[inline]
+    pub fn sym_outer(u: V6, w: V6) -> M6 {
+        let mut m = M6::outer(u, w);
+        m.add_outer(w, u, 1.0);
+        m.scale(0.5)
+    }
     /// Largest absolute entry (for scaling tests and tolerances).
     pub fn max_abs(&self) -> f64 {
         [self.a, self.b, self.c, self.d]

@@ -121,7 +121,7 @@ fn tangent_without_geometric_stiffness_fails_the_same_check() {
     let mut r0 = vec![0.0; n];
     m.chain.residual_into(0.0, &q, &zero, &zero, &mut r0).unwrap();
     for fr in m.chain.frames.iter_mut() {
-        fr.b = spatial::M6::ZERO;
+        fr.gs = spatial::V6::ZERO;
     }
     let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
     let mut x = vec![0.0; n];
