@@ -366,6 +366,34 @@ impl Chain {
     /// Residual `r = M(q) a − Q(t, q, v)` (see [`SecondOrderSystem`]); also
     /// prepares everything [`Chain::solve_into`] needs at this state.
     pub fn residual_into(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError> {
+        self.sweep(t, q, v, a, r, None)
+    }
+
+    /// Residual and Newton correction in one tip-to-base sweep: `rhs = −r`
+    /// and `(M + c_v C + c_q (K + K_g)) x = rhs` (see
+    /// [`SecondOrderSystem::residual_and_correction`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn residual_and_correction_into(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        c_v: f64,
+        c_q: f64,
+        rhs: &mut [f64],
+        x: &mut [f64],
+    ) -> Result<(), SystemError> {
+        self.sweep(t, q, v, a, rhs, Some((c_v, c_q)))?;
+        self.forward_solve(x);
+        Ok(())
+    }
+
+    /// Forward kinematics, loads, and the tip-to-base sweep. Without
+    /// `solve`, writes the residual into `r`; with `solve = (c_v, c_q)`,
+    /// writes `−r` into `r` and runs the articulated-body backward sweep
+    /// for that right-hand side on the way (finish with `forward_solve`).
+    fn sweep(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64], solve: Option<(f64, f64)>) -> Result<(), SystemError> {
         if let Some(index) = q.iter().chain(v).chain(a).position(|x| !x.is_finite()) {
             return Err(SystemError::NonFinite { index: index % q.len().max(1) });
         }
@@ -429,21 +457,29 @@ impl Chain {
         let mut fc = V6::ZERO;
         let mut h = M6::ZERO;
         let mut h_sym = M6::ZERO;
+        let mut aba = AbaCarry::default();
         for s in (0..n).rev() {
             let j = &self.joints[s];
             let fr = &mut self.frames[s];
             let slot = self.link_slot[s];
-            if slot != u32::MAX {
-                let ls = &self.links[slot as usize];
+            let ls = (slot != u32::MAX).then(|| &self.links[slot as usize]);
+            if let Some(ls) = ls {
                 fc += ls.f;
                 h += ls.h;
                 h_sym = (h + h.transpose()).scale(0.5);
             }
             fr.fc = fc;
-            r[s] = -fr.s.dot(fc) + j.stiffness * (q[s] - j.rest) + j.damping * v[s] - self.joint_forces[s];
+            let res = -fr.s.dot(fc) + j.stiffness * (q[s] - j.rest) + j.damping * v[s] - self.joint_forces[s];
             // G_s = ½(H + Hᵀ) + ½(a zᵀ + z aᵀ), a = F̄(f^c) S = S ×* f^c,
             // zᵀS = 1, aᵀS = 0, so G_s S_s = ½(H + Hᵀ) S + ½ S ×* f^c.
             fr.gs = h_sym.mul_vec(fr.s) + fr.s.cross_force(fc) * 0.5;
+            match solve {
+                None => r[s] = res,
+                Some((c_v, c_q)) => {
+                    r[s] = -res;
+                    aba.down(s, j, fr, ls, c_v, c_q, -res)?;
+                }
+            }
         }
         Ok(())
     }
@@ -458,44 +494,24 @@ impl Chain {
     /// `Ĩ_s = I_s + Ĩ_{s+1} − U_{s+1} U_{s+1}ᵀ / D_{s+1}`, and needs `G_s` only
     /// through `U_s = Ĩ_s S_s − c_q G_s S_s`: no 6×6 geometric block is formed.
     pub fn solve_into(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
-        let n = self.joints.len();
-        let mut carry_i = M6::ZERO;
-        let mut carry_p = V6::ZERO;
-        for s in (0..n).rev() {
-            let j = &self.joints[s];
-            let fr = &mut self.frames[s];
+        let mut aba = AbaCarry::default();
+        for s in (0..self.joints.len()).rev() {
             let slot = self.link_slot[s];
-            if slot != u32::MAX {
-                let ls = &self.links[slot as usize];
-                carry_i += ls.inertia;
-                if ls.anchored {
-                    carry_i.add_scaled(&ls.k_anchor, c_q);
-                    carry_i.add_scaled(&ls.c_anchor, c_v);
-                }
-            }
-            let uv = carry_i.mul_vec(fr.s) - fr.gs * c_q;
-            let armature = c_v * j.damping + c_q * j.stiffness;
-            let d = fr.s.dot(uv) + armature;
-            // The effective matrix may be indefinite (compression, large c_q);
-            // only a vanishing pivot is fatal.
-            if !d.is_finite() || d.abs() <= 1e-14 * (fr.s.dot(fr.s).sqrt() * uv.dot(uv).sqrt() + armature.abs()) {
-                return Err(SystemError::Singular { index: s, pivot: d });
-            }
-            let u = b[s] - fr.s.dot(carry_p);
-            fr.u_vec = uv;
-            fr.d = d;
-            fr.u = u;
-            carry_i.add_outer(uv, uv, -1.0 / d);
-            carry_p = carry_p + uv * (u / d);
+            let ls = (slot != u32::MAX).then(|| &self.links[slot as usize]);
+            aba.down(s, &self.joints[s], &mut self.frames[s], ls, c_v, c_q, b[s])?;
         }
+        self.forward_solve(x);
+        Ok(())
+    }
+
+    /// Base-to-tip half of the articulated-body solve.
+    fn forward_solve(&self, x: &mut [f64]) {
         let mut acc = V6::ZERO;
-        for s in 0..n {
-            let fr = &self.frames[s];
+        for (s, fr) in self.frames.iter().enumerate() {
             let xs = (fr.u - fr.u_vec.dot(acc)) / fr.d;
             x[s] = xs;
             acc += fr.s * xs;
         }
-        Ok(())
     }
 
     /// Kinetic energy at the last kinematics evaluation, J.
@@ -550,11 +566,62 @@ impl SecondOrderSystem for Chain {
     ) -> Result<(), SystemError> {
         self.solve_into(c_v, c_q, b, x)
     }
+    fn residual_and_correction(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        c_v: f64,
+        c_q: f64,
+        rhs: &mut [f64],
+        x: &mut [f64],
+    ) -> Result<(), SystemError> {
+        self.residual_and_correction_into(t, q, v, a, c_v, c_q, rhs, x)
+    }
     fn max_frequency(&self, _q: &[f64]) -> Option<f64> {
         self.max_frequency
     }
     fn position_tolerance(&self) -> f64 {
         self.position_tolerance
+    }
+}
+
+/// Tip-to-base state of the articulated-body solve: the shifted
+/// articulated inertia `Ĩ` and bias carried to the parent.
+#[derive(Default)]
+struct AbaCarry {
+    inertia: M6,
+    bias: V6,
+}
+
+impl AbaCarry {
+    /// One sub-joint of the backward sweep (see [`Chain::solve_into`]).
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn down(&mut self, s: usize, j: &SubJoint, fr: &mut Frame, ls: Option<&LinkScratch>, c_v: f64, c_q: f64, b: f64) -> Result<(), SystemError> {
+        if let Some(ls) = ls {
+            self.inertia += ls.inertia;
+            if ls.anchored {
+                self.inertia.add_scaled(&ls.k_anchor, c_q);
+                self.inertia.add_scaled(&ls.c_anchor, c_v);
+            }
+        }
+        let uv = self.inertia.mul_vec(fr.s) - fr.gs * c_q;
+        let armature = c_v * j.damping + c_q * j.stiffness;
+        let d = fr.s.dot(uv) + armature;
+        // The effective matrix may be indefinite (compression, large c_q);
+        // only a vanishing pivot is fatal.
+        if !d.is_finite() || d.abs() <= 1e-14 * (fr.s.dot(fr.s).sqrt() * uv.dot(uv).sqrt() + armature.abs()) {
+            return Err(SystemError::Singular { index: s, pivot: d });
+        }
+        let u = b - fr.s.dot(self.bias);
+        fr.u_vec = uv;
+        fr.d = d;
+        fr.u = u;
+        self.inertia.add_outer(uv, uv, -1.0 / d);
+        self.bias += uv * (u / d);
+        Ok(())
     }
 }
 

@@ -84,15 +84,11 @@ pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
     let sys_err = |source| Failure::Error(IntegrateError::System { t, source });
     for _ in 0..max_iterations {
         update_coordinates(ws, c_q, c_v);
-        sys.residual(t, &ws.q, &ws.v, &ws.x, &mut ws.r).map_err(sys_err)?;
+        sys.residual_and_correction(t, &ws.q, &ws.v, &ws.x, c_v, c_q, &mut ws.r, &mut ws.dx).map_err(sys_err)?;
         stats.residual_evals += 1;
-        for ri in ws.r.iter_mut() {
-            *ri = -*ri;
-        }
         if !ws.r.iter().all(|x| x.is_finite()) {
             return Err(IntegrateError::NonFinite { t }.into());
         }
-        sys.solve_tangent(t, &ws.q, &ws.v, &ws.x, c_v, c_q, &ws.r, &mut ws.dx).map_err(sys_err)?;
         stats.solves += 1;
         stats.newton_iterations += 1;
         let mut converged = true;

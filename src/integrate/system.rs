@@ -68,6 +68,31 @@ pub trait SecondOrderSystem {
         x: &mut [f64],
     ) -> Result<(), SystemError>;
 
+    /// One Newton iteration's work: writes the right-hand side `rhs = −r(t,
+    /// q, v, a)` and the correction `x` solving
+    /// `(M + c_v·C_t + c_q·K_t) x = rhs`. The default calls
+    /// [`residual`](Self::residual) then [`solve_tangent`](Self::solve_tangent);
+    /// a system may fuse the two (a chain does both in one tip-to-base
+    /// sweep).
+    #[allow(clippy::too_many_arguments)]
+    fn residual_and_correction(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        c_v: f64,
+        c_q: f64,
+        rhs: &mut [f64],
+        x: &mut [f64],
+    ) -> Result<(), SystemError> {
+        self.residual(t, q, v, a, rhs)?;
+        for r in rhs.iter_mut() {
+            *r = -*r;
+        }
+        self.solve_tangent(t, q, v, a, c_v, c_q, rhs, x)
+    }
+
     /// An upper estimate of the highest natural angular frequency of the
     /// system at `q`, rad/s. Explicit schemes use it to choose their
     /// sub-steps; `None` means unknown (explicit schemes then refuse to pick
