@@ -25,8 +25,8 @@ fn fixed(rot: DMat3, p: DVec3) -> BaseMotion {
 
 /// The 45° bend: R = 100, arc in the x–z plane from the origin tangent to +z
 /// curving to +x, EI = GJ = 8.333e5, EA = 1e7, kGA = 4.1667e6, clamped at
-/// the origin, stress-free in its curved shape (every sub-joint's rest =
-/// its initial coordinate), dead tip force P·(+y) applied in `increments`
+/// the origin, stress-free in its curved shape
+/// (`RopeBuilder::stress_free_shape`), dead tip force P·(+y) applied in `increments`
 /// equal steps. The whole problem (base, path, load) is rotated by `rot`.
 /// Returns the tip displacement (rotated back) at every increment.
 fn bend45(n: usize, gj_factor: f64, increments: usize, p_max: f64, rot: DMat3) -> Vec<(f64, DVec3)> {
@@ -52,11 +52,9 @@ fn bend45(n: usize, gj_factor: f64, increments: usize, p_max: f64, rot: DMat3) -
         .start(RopeStart::Clamped(fixed(rot, DVec3::ZERO)))
         .end(RopeEnd::Free)
         .gravity(DVec3::ZERO)
+        .stress_free_shape(true)
         .build()
         .unwrap();
-    for (j, q0) in m.chain.joints.iter_mut().zip(&m.q0) {
-        j.rest = *q0;
-    }
     let initial = m.nodes()[n];
     let expected = rot * DVec3::new(r - r * (PI / 4.0).cos(), 0.0, r * (PI / 4.0).sin());
     assert!(initial.distance(expected) < 1e-9, "initial tip {initial:?}");
@@ -87,7 +85,7 @@ const BEND45_TABLE: [(f64, DVec3); 2] = [(300.0, DVec3::new(-7.045, 40.192, -11.
 /// the report: the Euler-angle strain measure of the joints). Asserted here:
 /// first-order convergence, the Richardson extrapolation 2Δ(128) − Δ(64)
 /// within 0.1 % of the Kirchhoff solution (the model converges to the right
-/// answer), 8/10/20 load increments agree, and the GJ × 10⁶ guard is far off.
+/// answer), 8/10/20 load increments agree, and the GJ × 100 guard (torsion effectively rigid) is far off.
 #[test]
 fn bend45_out_of_plane_tip_load() {
     let ns = [8, 16, 32, 64, 128];
@@ -103,13 +101,16 @@ fn bend45_out_of_plane_tip_load() {
         for k in 1..ns.len() - 1 {
             let ratio = errs[k] / errs[k + 1];
             println!("  P={p}: error ratio N={} / N={}: {ratio:.2}", ns[k], ns[k + 1]);
-            assert!((1.7..2.3).contains(&ratio), "P={p}: convergence ratio {ratio}");
+            // Second order until the error reaches the table's own rounding.
+            if errs[k + 1] > 2e-4 {
+                assert!((3.4..4.6).contains(&ratio), "P={p}: convergence ratio {ratio}");
+            }
         }
-        let extrapolated = 2.0 * at(&runs[4], p) - at(&runs[3], p);
+        let extrapolated = (4.0 * at(&runs[4], p) - at(&runs[3], p)) / 3.0;
         let e_extra = extrapolated.distance(reference) / reference.length();
-        println!("  P={p}: Richardson 2Δ(128) − Δ(64) = ({:.3}, {:.3}, {:.3}): |error| {:.3} % of |Δ|", extrapolated.x, extrapolated.y, extrapolated.z, 100.0 * e_extra);
+        println!("  P={p}: Richardson (4Δ(128) − Δ(64))/3 = ({:.3}, {:.3}, {:.3}): |error| {:.3} % of |Δ|", extrapolated.x, extrapolated.y, extrapolated.z, 100.0 * e_extra);
         assert!(e_extra < 1e-3, "P={p}: extrapolated error {e_extra}");
-        assert!(errs[3] < 5e-3 && errs[4] < 5e-3, "P={p}: N = 64, 128 outside 0.5 %");
+        assert!(errs[1] < 5e-3 && errs[2] < 5e-3, "P={p}: N = 16, 32 outside 0.5 %");
     }
     // Path independence: 8, 10, 20 load increments (N = 16).
     let finals: Vec<DVec3> = [8, 10, 20].iter().map(|&inc| bend45(16, 1.0, inc, 600.0, DMat3::IDENTITY).last().unwrap().1).collect();
@@ -118,20 +119,20 @@ fn bend45_out_of_plane_tip_load() {
     assert!(spread < 1e-6 * finals[0].length(), "path dependence {spread}");
     // Guard: without torsional compliance the bend is much stiffer.
     for n in [16, 128] {
-        let stiff = bend45(n, 1e6, 10, 600.0, DMat3::IDENTITY);
+        let stiff = bend45(n, 100.0, 10, 600.0, DMat3::IDENTITY);
         for (p, reference) in BEND45_TABLE {
             let d = at(&stiff, p);
             let err = d.distance(reference) / reference.length();
-            println!("guard GJ×1e6, N={n} P={p}: Δ = ({:.3}, {:.3}, {:.3}): |error| {:.2} % of |Δ|", d.x, d.y, d.z, 100.0 * err);
+            println!("guard GJ×100, N={n} P={p}: Δ = ({:.3}, {:.3}, {:.3}): |error| {:.2} % of |Δ|", d.x, d.y, d.z, 100.0 * err);
             assert!(err > 0.02, "the torsion guard does not separate: {err}");
         }
     }
 }
 
-/// The §1c bar as stated (0.5 % of |Δ| with 16 and 32 elements). FAILS:
-/// 1.12 % / 0.62 % at P = 600 — first-order convergence (see the report).
+/// The §1c bar as stated (0.5 % of |Δ| with 16 and 32 elements). (Failed
+/// at 1.12 % / 0.62 % with one spring per Euler angle; passes with the
+/// objective rotation-vector law.)
 #[test]
-#[ignore = "fails: O(1/N) convergence of precurved 3D beams (Euler-angle joint strain), see docs/verification-rope-extra.md"]
 fn bend45_meets_section_1c_tolerance_with_16_elements() {
     for n in [16, 32] {
         let run = bend45(n, 1.0, 10, 600.0, DMat3::IDENTITY);
@@ -143,15 +144,12 @@ fn bend45_meets_section_1c_tolerance_with_16_elements() {
     }
 }
 
-/// Objectivity. (i) Rotating the whole problem (base, path, load) about the
+/// Objectivity: rotating the whole problem (base, path, load) about the
 /// world y axis — the builder's frame helper axis, so every element frame
 /// turns with it and the coordinates are unchanged — gives the same tip
 /// displacement (rotated back) to solver tolerance: the kinematics, loads
-/// and solver are objective. (ii) An arbitrary rotation also changes the
-/// element frames' twist reference (parallel transport from a different
-/// first frame); the answer then differs at O(1/N) (Euler-angle strain
-/// measure, see the report), halving with each doubling of N, and both
-/// orientations extrapolate to the same limit.
+/// and solver are objective. (An arbitrary rotation, which also changes the
+/// element frames' twist reference: `bend45_is_objective_under_arbitrary_rotation`.)
 #[test]
 fn bend45_objectivity_under_rigid_rotation() {
     let plain = bend45(16, 1.0, 10, 600.0, DMat3::IDENTITY);
@@ -160,33 +158,13 @@ fn bend45_objectivity_under_rigid_rotation() {
     println!("rotation 1 rad about y (frames rotate with the problem): largest tip-displacement difference over the load path {worst:.2e}");
     assert!(worst < 1e-7 * plain.last().unwrap().1.length(), "not objective: {worst}");
 
-    let rot = DMat3::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
-    let mut diffs = Vec::new();
-    let mut limits = Vec::new();
-    for n in [16, 32, 64, 128] {
-        let a = bend45(n, 1.0, 10, 600.0, DMat3::IDENTITY).last().unwrap().1;
-        let b = bend45(n, 1.0, 10, 600.0, rot).last().unwrap().1;
-        let diff = a.distance(b) / a.length();
-        println!("rotation 0.7 rad about (1,2,3), N={n}: P=600 tip displacements differ by {:.3} % of |Δ|", 100.0 * diff);
-        diffs.push(diff);
-        limits.push((a, b));
-    }
-    for k in 0..diffs.len() - 1 {
-        let ratio = diffs[k] / diffs[k + 1];
-        assert!((1.7..2.3).contains(&ratio), "orientation dependence does not vanish as O(1/N): {ratio}");
-    }
-    let (a64, b64) = limits[2];
-    let (a128, b128) = limits[3];
-    let (ea, eb) = (2.0 * a128 - a64, 2.0 * b128 - b64);
-    let d = ea.distance(eb) / ea.length();
-    println!("Richardson limits of the two orientations differ by {:.3} % of |Δ|", 100.0 * d);
-    assert!(d < 2e-4);
 }
 
 /// Strict objectivity under an arbitrary rotation at N = 16 (difference
-/// below 1e-6 |Δ|). FAILS: 1.1 % (see `bend45_objectivity_under_rigid_rotation`).
+/// below 1e-6 |Δ|): the strain measure does not depend on the element
+/// frames' twist reference. (Failed at 1.1 % with one spring per Euler
+/// angle; exact with the rotation-vector law.)
 #[test]
-#[ignore = "fails: element-frame (twist reference) dependence at O(1/N), see docs/verification-rope-extra.md"]
 fn bend45_is_objective_under_arbitrary_rotation() {
     let plain = bend45(16, 1.0, 10, 600.0, DMat3::IDENTITY);
     let rot = DMat3::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7);
@@ -200,10 +178,10 @@ fn bend45_is_objective_under_arbitrary_rotation() {
 /// GJ = 0.7) under dead tip loads: planar bending (F_y = −3) converges as
 /// O(1/N²) (successive-difference ratio 4), but as soon as two rotation
 /// components meet at the joints — a tip torque M_x = 0.5 with F_y = −3, or
-/// biaxial bending F_y = −2 with M_y = 1.5 — the ratio drops to 2: O(1/N).
-/// No closed form is needed: |x(N) − x(2N)| / |x(2N) − x(4N)| gives the
-/// order. Asserted as measured (the first-order cases are a reported
-/// limitation).
+/// biaxial bending F_y = −2 with M_y = 1.5 — the ratio stays 4 with the
+/// objective rotation-vector law (it dropped to 2, O(1/N), with one spring
+/// per Euler angle). No closed form is needed: |x(N) − x(2N)| /
+/// |x(2N) − x(4N)| gives the order.
 #[test]
 fn straight_cantilever_convergence_order_2d_vs_3d() {
     let cant = |n: usize, force: DVec3, moment: DVec3| -> DVec3 {
@@ -228,8 +206,8 @@ fn straight_cantilever_convergence_order_2d_vs_3d() {
     };
     let cases = [
         ("planar F_y = −3", DVec3::new(0.0, -3.0, 0.0), DVec3::ZERO, 4.0),
-        ("F_y = −3 + torque M_x = 0.5", DVec3::new(0.0, -3.0, 0.0), DVec3::new(0.5, 0.0, 0.0), 2.0),
-        ("biaxial F_y = −2, M_y = 1.5", DVec3::new(0.0, -2.0, 0.0), DVec3::new(0.0, 1.5, 0.0), 2.0),
+        ("F_y = −3 + torque M_x = 0.5", DVec3::new(0.0, -3.0, 0.0), DVec3::new(0.5, 0.0, 0.0), 4.0),
+        ("biaxial F_y = −2, M_y = 1.5", DVec3::new(0.0, -2.0, 0.0), DVec3::new(0.0, 1.5, 0.0), 4.0),
     ];
     for (name, force, moment, expected) in cases {
         let tips: Vec<DVec3> = [10, 20, 40, 80].iter().map(|&n| cant(n, force, moment)).collect();
@@ -289,12 +267,8 @@ fn cable_midspan_point_load() {
         let steps = 10;
         for k in 1..=steps {
             m.chain.loads[0].force = DVec3::new(0.0, -p * k as f64 / steps as f64, 0.0);
-            match m.chain.solve_static(0.0, &mut q, 1e-10, 500) {
-                Ok(_) => {}
-                // Round-off floor of the 2e9 N/m end springs (see
-                // verify_waves::solve_static_stalls_at_roundoff_floor).
-                Err(StaticError::NotConverged { residual, .. }) if residual < 1e-6 * p => {}
-                Err(e) => panic!("T0={t0} P={p}: {e}"),
+            if let Err(e) = m.chain.solve_static(0.0, &mut q, 1e-10, 500) {
+                panic!("T0={t0} P={p}: {e}");
             }
         }
         let zero = vec![0.0; q.len()];
@@ -712,19 +686,16 @@ fn invert(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
     m.into_iter().map(|r| r[n..].to_vec()).collect()
 }
 
-/// Reproducer for a `Chain::solve_static` scale problem (reported, not
-/// fixed here): a straight clamped cantilever L = 78.54 m, EI = 8.33e5
+/// Regression test for a former `Chain::solve_static` scale problem (fixed
+/// here): a straight clamped cantilever L = 78.54 m, EI = 8.33e5
 /// N·m², μ = 1 kg/m, dead tip load 60 N (α = PL²/EI = 0.44, a mild case)
 /// does not converge in 300 iterations — the max-norm residual creeps up
 /// (4439 → 4846 N·m) while the pseudo-time factor c drops to its 1e-6 s²
 /// floor. The same beam with μ ≤ 0.1 kg/m converges in 5–7 iterations to
-/// the same (mass-independent) answer. Cause: c starts at 1e-2 s² and is
-/// cut whenever ‖r‖∞ grows; for a structure whose lowest ω² = k/m is ≲ 1/c
-/// (here ω₁ ≈ 0.5 rad/s, 1/ω₁² ≈ 4 s²) the early mass-dominated steps raise
-/// ‖r‖∞ although they lower the energy, so c never grows. Run with
-/// `--ignored`.
+/// the same (mass-independent) answer. Cause was the pseudo-time control
+/// (c cut whenever ‖r‖∞ grew); it now grows c unless a step needs the
+/// rotation limit. Regression test.
 #[test]
-#[ignore = "documents a solve_static scale problem (src/cable/chain.rs); fails"]
 fn solve_static_stalls_on_soft_long_cantilever() {
     let length = 100.0 * PI / 4.0;
     let ei = 1e7 / 12.0;

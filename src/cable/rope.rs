@@ -15,7 +15,7 @@
 //! discretisation; large overall rotations are carried by the recursion, so
 //! geometric nonlinearity is exact as `N → ∞`.
 
-use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkMass, SubJoint};
+use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkMass, RotationSpring, SubJoint};
 use super::material::RopeSection;
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 use std::sync::Arc;
@@ -136,6 +136,7 @@ pub struct RopeBuilder {
     end: RopeEnd,
     gravity: DVec3,
     end_stiffness_factor: f64,
+    stress_free_shape: bool,
 }
 
 /// Where things are in a rope's chain.
@@ -227,6 +228,7 @@ impl RopeBuilder {
             end: RopeEnd::Free,
             gravity: DVec3::new(0.0, -9.81, 0.0),
             end_stiffness_factor: 1e3,
+            stress_free_shape: false,
         }
     }
     /// Shear stiffness GA, N (default: EA, effectively rigid but finite).
@@ -244,6 +246,16 @@ impl RopeBuilder {
     /// start anchor point. A path longer than the rope pre-strains it.
     pub fn path(mut self, points: Vec<DVec3>) -> Self {
         self.path = Some(points);
+        self
+    }
+    /// Makes the initial path the stress-free shape (a pre-curved beam, a
+    /// kinked wire): each element's initial relative rotation becomes the
+    /// constant frame rotation `C` of its joint (REFERENCE §1 (2)) and its
+    /// initial gap the rest stretch, so the coordinates start at zero and
+    /// measure the deformation from that shape. Default `false`: a rope is
+    /// straight when unstressed, and a curved path is a deformed state.
+    pub fn stress_free_shape(mut self, yes: bool) -> Self {
+        self.stress_free_shape = yes;
         self
     }
     /// How the start is held.
@@ -357,6 +369,7 @@ impl RopeBuilder {
             }
         };
         let first = joints.len();
+        let mut rotation_springs = Vec::with_capacity(n);
         for i in 0..n {
             let (kb, kb2, kt) = if i == 0 {
                 if clamp_start {
@@ -376,12 +389,22 @@ impl RopeBuilder {
             let (angles, offset) = if i == 0 {
                 jz.pre_rotation = parent_rot.transpose() * rots[0];
                 ((0.0, 0.0, 0.0), first_offset)
+            } else if self.stress_free_shape {
+                jz.pre_rotation = rots[i - 1].transpose() * rots[i];
+                ((0.0, 0.0, 0.0), DVec3::new(le, 0.0, 0.0))
             } else {
                 let rel = rots[i - 1].transpose() * rots[i];
                 (DQuat::from_mat3(&rel).to_euler(EulerRot::ZYX), DVec3::new(le, 0.0, 0.0))
             };
             jz.offset = offset;
+            if i > 0 || clamp_start {
+                rotation_springs.push(RotationSpring { first: joints.len(), k: DVec3::new(kt, kb2, kb), tau });
+            }
             let gap = nodes[i + 1].distance(nodes[i]) - le;
+            let mut px = px;
+            if self.stress_free_shape {
+                px.rest = gap;
+            }
             joints.extend([jz, jy, jx, px, py, pz]);
             q0.extend([angles.0, angles.1, angles.2, gap, 0.0, 0.0]);
         }
@@ -449,6 +472,7 @@ impl RopeBuilder {
         let origin = start;
         let mut chain = Chain::new(joints, base, self.gravity, origin);
         chain.anchors = anchors;
+        chain.rotation_springs = rotation_springs;
         chain.max_frequency = Some(omega2.sqrt());
         let layout = RopeLayout { elements: n, element_length: le, first, start_body, end_body };
         let zeros = vec![0.0; q0.len()];
