@@ -9,11 +9,14 @@
 //!   the anchor (or rigidly clamped), with its mass and full rotary inertia.
 //! * A `dynamic` body at a cable's start that one `prismatic` joint holds to
 //!   the world (a trolley on its rail) is a link of the chain too, behind a
-//!   prismatic sub-joint; a force `drive` on that joint acts on it.
+//!   prismatic sub-joint; a `drive` on that joint acts on it (a force table,
+//!   or a velocity motor: an implicit damper `c (v_target − v)` with
+//!   `c = m/(2 dt)`, saturating at `max_force`).
 //!
-//! Anything else (a dynamic body held by several cables or joints, velocity
-//! motors, winches, contact probes, wind and water) is reported as not yet
-//! supported, with the file position, rather than simulated wrongly.
+//! Anything else (a dynamic body held by several cables or joints, a cable
+//! starting on a free dynamic body, a free cable start, winches, contact
+//! probes, wind and water) is reported as not yet supported, with the file
+//! position, rather than simulated wrongly.
 
 use crate::cable::{
     BaseMotion, BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeEnd, RopeError,
@@ -96,8 +99,8 @@ struct SimCable {
     cable: Cable,
     /// Scenario body name → its place in the chain.
     bodies: Vec<(String, BodyInChain)>,
-    /// Prismatic joint of the start body (joint name, force drive).
-    slide: Option<(String, Option<scenario::TimeSeries>)>,
+    /// Prismatic joint of the start body (joint name, drive).
+    slide: Option<(String, Option<Drive>)>,
 }
 
 /// The cables of a scenario, stepped together (see the module docs).
@@ -175,9 +178,15 @@ impl World {
         for c in &mut self.cables {
             for k in 0..self.substeps {
                 let t = self.time + k as f64 * h;
-                if let Some((_, Some(force))) = &c.slide {
-                    // Drive force at the sub-step's midpoint.
-                    c.cable.model.chain.joint_forces[0] = force.value_at(t + 0.5 * h);
+                match &c.slide {
+                    Some((_, Some(Drive::Force { force }))) => {
+                        // Drive force at the sub-step's midpoint.
+                        c.cable.model.chain.joint_forces[0] = force.value_at(t + 0.5 * h);
+                    }
+                    Some((_, Some(Drive::Velocity { velocity, max_force }))) => {
+                        velocity_motor(&mut c.cable, velocity.value_at(t + h), *max_force, h);
+                    }
+                    _ => {}
                 }
                 c.cable.step(h).map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source })?;
             }
@@ -258,8 +267,10 @@ impl World {
                     (Some(c), Quantity::Position) => Probe::Scalar(c.cable.state.q[0]),
                     (Some(c), Quantity::Velocity) => Probe::Scalar(c.cable.state.v[0]),
                     (Some(c), _) => {
-                        let axis = c.cable.model.chain.link_rotation(0) * c.cable.model.chain.joints[0].axis;
-                        Probe::Vector(axis * c.cable.model.chain.joint_forces[0])
+                        // The drive force along the rail (the motor's damper included).
+                        let ch = &c.cable.model.chain;
+                        let axis = ch.link_rotation(0) * ch.joints[0].axis;
+                        Probe::Vector(axis * (ch.joint_forces[0] - ch.joints[0].damping * c.cable.state.v[0]))
                     }
                     (None, Quantity::Force) => Probe::Vector(DVec3::NAN),
                     (None, _) => Probe::Scalar(0.0),
@@ -277,6 +288,26 @@ impl World {
     /// Newton iterations, residual evaluations and solves of all cables so far.
     pub fn work(&self) -> (usize, usize) {
         self.cables.iter().fold((0, 0), |(a, b), c| (a + c.cable.total_stats.newton_iterations, b + c.cable.total_stats.solves))
+    }
+}
+
+/// A velocity-tracking motor on the chain's root prismatic sub-joint (a
+/// trolley drive), like rapier's joint motor: an implicit damper
+/// `F = c (v_target − v)` with `c = m_total / (2h)` (the error halves every
+/// step), switched to the constant force `±max_force` when the force it
+/// would need exceeds the limit. Sets the sub-joint's damping and drive
+/// force for the coming step.
+fn velocity_motor(cable: &mut Cable, target: f64, max_force: f64, h: f64) {
+    let ch = &mut cable.model.chain;
+    let total_mass: f64 = ch.joints.iter().filter_map(|j| j.link.map(|m| m.mass)).sum();
+    let c = total_mass / (2.0 * h);
+    let needed = c * (target - cable.state.v[0]);
+    if needed.abs() <= max_force {
+        ch.joints[0].damping = c;
+        ch.joint_forces[0] = c * target;
+    } else {
+        ch.joints[0].damping = 0.0;
+        ch.joint_forces[0] = max_force.copysign(needed);
     }
 }
 
@@ -353,12 +384,7 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
                     )));
                 };
                 let axis = j.axis.unwrap_or(DVec3::X);
-                let force = match &j.drive {
-                    None => None,
-                    Some(Drive::Force { force }) => Some(force.clone()),
-                    Some(Drive::Velocity { .. }) => return Err(SimError::Unsupported { file: file.to_string(), location: j.location, what: format!("velocity drive of joint `{}`", j.name) }),
-                };
-                slide = Some((j.name.clone(), force));
+                slide = Some((j.name.clone(), j.drive.clone()));
                 bodies.push((body.clone(), BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
                 builder.start(RopeStart::SlidingBody { body: lumped(b), axis, anchor: *anchor, clamp: *clamp })
             } else {
