@@ -4,7 +4,7 @@
 use super::chain::LinkLoad;
 use super::rope::{RopeModel, ELEMENT_DOFS};
 use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use thiserror::Error;
 
 /// Why a cable step failed.
@@ -95,7 +95,10 @@ impl Cable {
             self.integrator.scheme,
             Scheme::GeneralizedAlpha { .. } | Scheme::Hht { .. } | Scheme::Newmark { .. } | Scheme::LinearAcceleration
         ) && stats.substeps_used == 1;
-        if !newton_converged {
+        if self.model.layout.free_start {
+            self.rechart_free_start()?;
+        }
+        if !newton_converged || self.model.layout.free_start {
             self.refresh();
         }
         self.check_sanity()?;
@@ -112,12 +115,44 @@ impl Cable {
         let _ = self.model.chain.residual_into(s.t, &s.q, &s.v, &s.a, &mut r);
     }
 
+    /// Re-charts the floating first element when its middle Euler angle
+    /// passes 1 rad: folds its three rotation angles into the constant frame
+    /// rotation, maps their rates to the new, zero angles and recomputes a
+    /// consistent acceleration, so the angles never approach their
+    /// singularity however the rope tumbles.
+    fn rechart_free_start(&mut self) -> Result<(), CableError> {
+        let l = self.model.layout;
+        let s0 = l.dof(0, 3);
+        if self.state.q[s0 + 1].abs() < 1.0 {
+            return Ok(());
+        }
+        let q = &mut self.state.q;
+        let (a, b, c) = (q[s0], q[s0 + 1], q[s0 + 2]);
+        let rz = DMat3::from_rotation_z(a);
+        let rzy = rz * DMat3::from_rotation_y(b);
+        let r = rzy * DMat3::from_rotation_x(c);
+        // Relative angular velocity (and acceleration, to first order) in the
+        // old joint frame, then its components on the new frame's z, y, x.
+        let to_new = |x: &[f64]| {
+            let w = DVec3::Z * x[0] + rz * DVec3::Y * x[1] + rzy * DVec3::X * x[2];
+            let w_new = r.transpose() * w;
+            [w_new.z, w_new.y, w_new.x]
+        };
+        let joints = &mut self.model.chain.joints;
+        joints[s0].pre_rotation *= r;
+        q[s0..s0 + 3].iter_mut().for_each(|x| *x = 0.0);
+        let new = to_new(&self.state.v[s0..s0 + 3]);
+        self.state.v[s0..s0 + 3].copy_from_slice(&new);
+        self.state.recompute_acceleration(&mut self.model.chain)?;
+        Ok(())
+    }
+
     fn check_sanity(&self) -> Result<(), CableError> {
         let l = &self.model.layout;
         if !self.state.is_finite() {
             return Err(CableError::Diverged { time: self.state.t, reason: "non-finite state".into() });
         }
-        for i in 0..l.elements {
+        for i in usize::from(l.free_start)..l.elements {
             let gap = self.state.q[l.dof(i, 3)];
             if gap.abs() > l.element_length {
                 return Err(CableError::Diverged {
@@ -150,6 +185,9 @@ impl Cable {
                 fr.vel.bot + fr.vel.top.cross(fr.joint_point)
             })
             .collect();
+        if l.free_start {
+            out[0] = ch.link_point_velocity(l.element_link(0), DVec3::ZERO);
+        }
         out.push(ch.link_point_velocity(l.element_link(l.elements - 1), DVec3::new(l.element_length, 0.0, 0.0)));
         out
     }
@@ -173,6 +211,9 @@ impl Cable {
     /// `i`; joint 0 holds the start).
     pub fn element_forces(&self, i: usize) -> ElementForces {
         let l = &self.model.layout;
+        if i == 0 && l.free_start {
+            return ElementForces::default();
+        }
         let f = |k: usize| {
             let s = l.dof(i, k);
             let j = &self.model.chain.joints[s];

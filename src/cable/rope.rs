@@ -74,6 +74,10 @@ pub enum RopeStart {
     Pinned(BaseMotion),
     /// Clamped (tangent and twist fixed to the frame as initially laid).
     Clamped(BaseMotion),
+    /// A free start: the first element floats (three slides along the world
+    /// axes, then three rotations, re-charted after every step so the
+    /// Euler angles never approach their singularity). A path is required.
+    Free,
     /// Held by a body that slides on a prismatic joint to the world (a
     /// trolley): the body is a link of the rope's chain.
     SlidingBody {
@@ -152,6 +156,9 @@ pub struct RopeLayout {
     pub start_body: Option<BodyInChain>,
     /// Where the end body (hook, payload) sits in the chain, if any.
     pub end_body: Option<BodyInChain>,
+    /// The first element floats (free start): its six sub-joints are three
+    /// world slides and three rotations, not an elastic joint.
+    pub free_start: bool,
 }
 
 /// Where a lumped body sits in a chain: the link that carries it and the
@@ -284,6 +291,7 @@ impl RopeBuilder {
         match &self.start {
             RopeStart::Pinned(b) | RopeStart::Clamped(b) => b.at(0.0).position,
             RopeStart::SlidingBody { body, anchor, .. } => body.position + body.rotation * *anchor,
+            RopeStart::Free => self.path.as_ref().and_then(|p| p.first().copied()).unwrap_or(DVec3::ZERO),
         }
     }
 
@@ -309,6 +317,10 @@ impl RopeBuilder {
         let n = self.segments;
         let le = self.length / n as f64;
         let start = self.start_point();
+        let free_start = matches!(self.start, RopeStart::Free);
+        if free_start && self.path.is_none() {
+            return Err(RopeError::InvalidPath("a free start needs a path".into()));
+        }
         let path = match &self.path {
             Some(p) => p.clone(),
             None => vec![start, start + DVec3::new(0.0, -self.length, 0.0)],
@@ -367,6 +379,7 @@ impl RopeBuilder {
                 q0.push(0.0);
                 (base, *clamp, body.rotation, *anchor, Some(BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }))
             }
+            RopeStart::Free => (BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, start)), false, DMat3::IDENTITY, DVec3::ZERO, None),
         };
         let first = joints.len();
         let mut rotation_springs = Vec::with_capacity(n);
@@ -380,6 +393,21 @@ impl RopeBuilder {
             } else {
                 (s.ei / le, s.ei2 / le, s.gj / le)
             };
+            if i == 0 && free_start {
+                // Floating first element: world slides, then rotations.
+                let mut jz = spring(JointKind::Revolute, DVec3::Z, 0.0, None);
+                jz.pre_rotation = rots[0];
+                joints.extend([
+                    spring(JointKind::Prismatic, DVec3::X, 0.0, None),
+                    spring(JointKind::Prismatic, DVec3::Y, 0.0, None),
+                    spring(JointKind::Prismatic, DVec3::Z, 0.0, None),
+                    jz,
+                    spring(JointKind::Revolute, DVec3::Y, 0.0, None),
+                    spring(JointKind::Revolute, DVec3::X, 0.0, Some(element_mass)),
+                ]);
+                q0.extend([0.0; 6]);
+                continue;
+            }
             let mut jz = spring(JointKind::Revolute, DVec3::Z, kb, None);
             let jy = spring(JointKind::Revolute, DVec3::Y, kb2, None);
             let jx = spring(JointKind::Revolute, DVec3::X, kt, None);
@@ -474,7 +502,7 @@ impl RopeBuilder {
         chain.anchors = anchors;
         chain.rotation_springs = rotation_springs;
         chain.max_frequency = Some(omega2.sqrt());
-        let layout = RopeLayout { elements: n, element_length: le, first, start_body, end_body };
+        let layout = RopeLayout { elements: n, element_length: le, first, start_body, end_body, free_start };
         let zeros = vec![0.0; q0.len()];
         let mut r = vec![0.0; q0.len()];
         chain
@@ -525,6 +553,9 @@ impl RopeModel {
     pub fn nodes(&self) -> Vec<DVec3> {
         let l = &self.layout;
         let mut out: Vec<DVec3> = (0..l.elements).map(|i| self.chain.joint_point(l.dof(i, 0))).collect();
+        if l.free_start {
+            out[0] = self.chain.link_point(l.element_link(0), DVec3::ZERO);
+        }
         out.push(self.chain.link_point(l.element_link(l.elements - 1), DVec3::new(l.element_length, 0.0, 0.0)));
         out
     }
@@ -545,6 +576,9 @@ impl RopeModel {
     /// Axial force of element joint `i` (tension positive), N: `EA/L_e · u +
     /// damping`, at coordinates `q` and rates `v`.
     pub fn tension(&self, i: usize, q: &[f64], v: &[f64]) -> f64 {
+        if i == 0 && self.layout.free_start {
+            return 0.0;
+        }
         let s = self.layout.dof(i, 3);
         let j = &self.chain.joints[s];
         j.stiffness * (q[s] - j.rest) + j.damping * v[s]

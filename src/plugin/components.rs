@@ -50,7 +50,7 @@ pub struct CableDescriptor {
     /// Initial centreline (world, m); default straight from start to end, or
     /// straight down from the start when the end is free or on a body.
     pub path: Option<Vec<Vec3>>,
-    /// Start anchor (must not be free).
+    /// Start anchor (a free start needs a `path`).
     pub start: CableAnchor,
     /// End anchor.
     pub end: CableAnchor,

@@ -83,9 +83,12 @@ pub(crate) fn init_cables(
         // Start.
         let (start, start_point) = match &d.start {
             CableAnchor::Free => {
-                fail("a free cable start is not supported; attach the start to the world or a body".into());
-                commands.entity(entity).remove::<CableDescriptor>();
-                continue;
+                let Some(p0) = d.path.as_ref().and_then(|p| p.first()) else {
+                    fail("a free cable start needs a path".into());
+                    commands.entity(entity).remove::<CableDescriptor>();
+                    continue;
+                };
+                (RopeStart::Free, p0.as_dvec3())
             }
             CableAnchor::World { point, clamp } => {
                 let b = BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, point.as_dvec3()));

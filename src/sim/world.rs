@@ -13,8 +13,10 @@
 //!   or a velocity motor: an implicit damper `c (v_target − v)` with
 //!   `c = m/(2 dt)`, saturating at `max_force`).
 //!
+//! * A free start floats (the path gives its initial shape).
+//!
 //! Anything else (a dynamic body held by several cables or joints, a cable
-//! starting on a free dynamic body, a free cable start, winches, contact
+//! starting on a free dynamic body, winches, contact
 //! probes, wind and water) is reported as not yet supported, with the file
 //! position, rather than simulated wrongly.
 
@@ -365,7 +367,7 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
     let mut bodies = Vec::new();
     let mut slide = None;
     builder = match &c.start {
-        CableEnd::Free => return Err(unsupported(format!("cable `{}` with a free start", c.name))),
+        CableEnd::Free => builder.start(RopeStart::Free),
         CableEnd::World { point, clamp } => {
             let base = BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, *point));
             builder.start(if *clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) })
