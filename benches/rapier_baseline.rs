@@ -1,0 +1,2 @@
+//! Placeholder; replaced by the real rapier baseline bench.
+fn main() {}
