@@ -105,7 +105,8 @@ pub struct CableSim {
 
 /// What other systems read about a cable (f32, world frame), refreshed
 /// every fixed step after rapier's writeback.
-#[derive(Component, Debug, Clone, Default)]
+#[derive(Component, Debug, Clone, Default, Reflect)]
+#[reflect(Component, Debug, Default)]
 pub struct CableState {
     /// Node positions (N + 1), m.
     pub nodes: Vec<Vec3>,

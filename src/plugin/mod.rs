@@ -86,6 +86,7 @@ pub struct CableSettings {
 impl Plugin for CablePlugin {
     fn build(&self, app: &mut App) {
         app.insert_resource(CableSettings { substeps: self.substeps.max(1) });
+        app.register_type::<CableState>();
         app.add_message::<CableDiverged>();
         app.configure_sets(
             FixedUpdate,
