@@ -30,3 +30,8 @@ pub mod scenario;
 pub mod sim;
 #[cfg(feature = "app")]
 pub mod plugin;
+
+/// The README's code examples, compiled and run as doctests.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
