@@ -676,20 +676,8 @@ impl Chain {
             let (theta, axes) = self.rotation_deviation(&rs, q);
             let f = rs.first;
             let omega = axes[0] * v[f] + axes[1] * v[f + 1] + axes[2] * v[f + 2];
-            let jinv = |x: DVec3| -> DVec3 {
-                // J_l⁻¹(θ) x = x − ½ θ×x + β θ×(θ×x), β = (1 − (φ/2)cot(φ/2))/φ².
-                let phi2 = theta.length_squared();
-                let beta = if phi2 < 1e-6 {
-                    1.0 / 12.0 + phi2 / 720.0
-                } else {
-                    let phi = phi2.sqrt();
-                    (1.0 - 0.5 * phi / (0.5 * phi).tan()) / phi2
-                };
-                x - 0.5 * theta.cross(x) + beta * theta.cross(theta.cross(x))
-            };
-            let theta_dot = jinv(omega);
-            let moment = rs.k * theta + rs.k * theta_dot * rs.tau;
-            // (Kθ)ᵀ J⁻¹ E_k = (J⁻ᵀ Kθ)·E_k, and J_l⁻ᵀ(θ) = J_l⁻¹(−θ).
+            // J_l⁻¹(θ) x = x − ½ θ×x + β θ×(θ×x), β = (1 − (φ/2)cot(φ/2))/φ²;
+            // J_l⁻ᵀ(θ) = J_l⁻¹(−θ).
             let phi2 = theta.length_squared();
             let beta = if phi2 < 1e-6 {
                 1.0 / 12.0 + phi2 / 720.0
@@ -697,12 +685,16 @@ impl Chain {
                 let phi = phi2.sqrt();
                 (1.0 - 0.5 * phi / (0.5 * phi).tan()) / phi2
             };
-            let m = moment + 0.5 * theta.cross(moment) + beta * theta.cross(theta.cross(moment));
+            let jinv = |x: DVec3, sign: f64| x - 0.5 * sign * theta.cross(x) + beta * theta.cross(theta.cross(x));
+            let theta_dot = jinv(omega, 1.0);
+            let moment = rs.k * theta + rs.k * theta_dot * rs.tau;
+            // Q_k = (Kθ + τKθ̇)ᵀ J⁻¹ E_k = (J⁻ᵀ m)·E_k.
+            let m = jinv(moment, -1.0);
             for (i, axis) in axes.iter().enumerate() {
                 self.elastic[f + i] = m.dot(*axis);
             }
             if k < self.rot_scratch.len() {
-                self.rot_scratch[k].0 = DMat3::from_cols(jinv(axes[0]), jinv(axes[1]), jinv(axes[2]));
+                self.rot_scratch[k].0 = DMat3::from_cols(jinv(axes[0], 1.0), jinv(axes[1], 1.0), jinv(axes[2], 1.0));
             }
         }
     }
