@@ -214,7 +214,7 @@ pub(crate) struct Frame {
     /// `G_s S_s`: the geometric-stiffness term the solve needs (see
     /// [`Chain::solve_into`]).
     pub gs: V6,
-    /// ABA scratch: `U = I^A S`, `D`, `u`.
+    /// ABA scratch: `U = I^A S`, `1/D`, `u`.
     pub u_vec: V6,
     pub d: f64,
     pub u: f64,
@@ -365,7 +365,15 @@ impl Chain {
             let fr = &mut self.frames[s];
             let rj = if j.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * j.pre_rotation };
             let pj = if j.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * j.offset };
-            let aw = rj * j.axis;
+            let aw = if j.axis == DVec3::X {
+                rj.x_axis
+            } else if j.axis == DVec3::Y {
+                rj.y_axis
+            } else if j.axis == DVec3::Z {
+                rj.z_axis
+            } else {
+                rj * j.axis
+            };
             let (sv, rot, pos) = match j.kind {
                 JointKind::Revolute => (V6::new(aw, pj.cross(aw)), rotate_about(rj, j.axis, q[s]), pj),
                 JointKind::Prismatic => (V6::new(DVec3::ZERO, aw), rj, pj + aw * q[s]),
@@ -524,7 +532,7 @@ impl Chain {
             let res = -fr.s.dot(fc) + self.elastic[s] - self.joint_forces[s];
             // G_s = ½(H + Hᵀ) + ½(a zᵀ + z aᵀ), a = F̄(f^c) S = S ×* f^c,
             // zᵀS = 1, aᵀS = 0, so G_s S_s = ½(H + Hᵀ) S + ½ S ×* f^c.
-            fr.gs = h_sym.mul_vec(fr.s) + fr.s.cross_force(fc) * 0.5;
+            fr.gs = h_sym.mul_motion(fr.s) + fr.s.cross_force(fc) * 0.5;
             match solve {
                 None => r[s] = res,
                 Some((c_v, c_q)) => {
@@ -591,7 +599,7 @@ impl Chain {
             match self.block[s] {
                 u32::MAX | BLOCK_INNER => {
                     let fr = &self.frames[s];
-                    let xs = (fr.u - fr.u_vec.dot(acc)) / fr.d;
+                    let xs = (fr.u - fr.u_vec.dot(acc)) * fr.d;
                     x[s] = xs;
                     acc += fr.s * xs;
                     s += 1;
@@ -658,10 +666,14 @@ impl Chain {
             (rz, rzy, rotate_about(rzy, DVec3::X, c))
         };
         let (rz, rzy, r) = rel(q[f], q[f + 1], q[f + 2]);
-        let (_, _, r0) = rel(self.joints[f].rest, self.joints[f + 1].rest, self.joints[f + 2].rest);
+        let rests = (self.joints[f].rest, self.joints[f + 1].rest, self.joints[f + 2].rest);
+        if rests == (0.0, 0.0, 0.0) {
+            return (rotation_vector(&r), [DVec3::Z, rz.y_axis, rzy.x_axis]);
+        }
+        let (_, _, r0) = rel(rests.0, rests.1, rests.2);
         let r0t = r0.transpose();
         let theta = rotation_vector(&(r0t * r));
-        (theta, [r0t * DVec3::Z, r0t * (rz * DVec3::Y), r0t * (rzy * DVec3::X)])
+        (theta, [r0t * DVec3::Z, r0t * rz.y_axis, r0t * rzy.x_axis])
     }
 
     /// Fills `self.elastic` with each sub-joint's spring + damper force.
@@ -757,20 +769,21 @@ impl AbaCarry {
         if let Some(ls) = ls {
             self.add_link(ls, c_v, c_q);
         }
-        let uv = self.inertia.mul_vec(fr.s) - fr.gs * c_q;
+        let uv = self.inertia.mul_motion(fr.s) - fr.gs * c_q;
         let armature = c_v * j.damping + c_q * j.stiffness;
         let d = fr.s.dot(uv) + armature;
         // The effective matrix may be indefinite (compression, large c_q);
-        // only a vanishing pivot is fatal.
-        if !d.is_finite() || d.abs() <= 1e-14 * (fr.s.dot(fr.s).sqrt() * uv.dot(uv).sqrt() + armature.abs()) {
+        // only a vanishing pivot is fatal: |d| ≲ 1e-14 (|S||U| + |armature|).
+        if !d.is_finite() || d * d <= 1e-28 * (fr.s.dot(fr.s) * uv.dot(uv) + armature * armature) {
             return Err(SystemError::Singular { index: s, pivot: d });
         }
+        let inv_d = 1.0 / d;
         let u = b - fr.s.dot(self.bias);
         fr.u_vec = uv;
-        fr.d = d;
+        fr.d = inv_d;
         fr.u = u;
-        self.inertia.add_outer(uv, uv, -1.0 / d);
-        self.bias += uv * (u / d);
+        self.inertia.add_outer(uv, uv, -inv_d);
+        self.bias += uv * (u * inv_d);
         Ok(())
     }
 

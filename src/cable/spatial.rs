@@ -112,6 +112,16 @@ impl M6 {
     pub fn mul_vec(&self, x: V6) -> V6 {
         V6::new(self.a * x.top + self.b * x.bot, self.c * x.top + self.d * x.bot)
     }
+    /// Product with a motion vector `[ω; v]` that may be purely linear
+    /// (`ω = 0`, a prismatic axis): half the work then.
+    #[inline]
+    pub fn mul_motion(&self, x: V6) -> V6 {
+        if x.top == DVec3::ZERO {
+            V6::new(self.b * x.bot, self.d * x.bot)
+        } else {
+            self.mul_vec(x)
+        }
+    }
     /// Transpose.
     #[inline]
     pub fn transpose(&self) -> M6 {
