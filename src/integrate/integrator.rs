@@ -73,6 +73,11 @@ pub(crate) struct Workspace {
     pub sa: Vec<f64>,
     pub dq_sum: Vec<f64>,
     pub dv_sum: Vec<f64>,
+    /// Acceleration at the start of the previous generalized-α step, that
+    /// step's size and end time (for the extrapolating predictor).
+    pub a_prev: Vec<f64>,
+    pub a_prev_h: f64,
+    pub a_prev_next_t: f64,
     backup: [Vec<f64>; 4],
     backup_t: f64,
 }
@@ -85,7 +90,7 @@ impl Workspace {
         let vectors = [
             &mut self.qb, &mut self.vb, &mut self.q, &mut self.v, &mut self.x, &mut self.r,
             &mut self.dx, &mut self.sq, &mut self.sv, &mut self.sa, &mut self.dq_sum,
-            &mut self.dv_sum,
+            &mut self.dv_sum, &mut self.a_prev,
         ];
         for x in vectors.into_iter().chain(self.backup.iter_mut()) {
             x.resize(n, 0.0);

@@ -24,7 +24,9 @@ use super::state::State;
 use super::system::SecondOrderSystem;
 
 /// One generalized-α step of size `h` (s) with Newton on `a₁` from the
-/// predictor `a₁ = a₀`.
+/// predictor `a₁ = a₀ + (a₀ − a₋₁) h/h₋₁` (linear extrapolation when the
+/// previous step ended where this one starts, else `a₁ = a₀`). The
+/// predictor changes only where Newton starts, not what it converges to.
 pub(crate) fn step_alpha<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     state: &mut State,
@@ -39,12 +41,14 @@ pub(crate) fn step_alpha<S: SecondOrderSystem + ?Sized>(
     // â₁ = s·a₁ + â_b with s = (1 − α_f)/(1 − α_m).
     let s = (1.0 - alpha_f) * d;
     let (h2, n) = (h * h, state.dof());
+    let extrapolate = ws.a_prev_next_t == state.t && ws.a_prev_h > 0.0;
+    let ratio = if extrapolate { h / ws.a_prev_h } else { 0.0 };
     for i in 0..n {
         let (a0, ah0) = (state.a[i], state.a_hat[i]);
         let ah_base = (alpha_f * a0 - alpha_m * ah0) * d;
         ws.qb[i] = state.q[i] + h * state.v[i] + h2 * ((0.5 - beta) * ah0 + beta * ah_base);
         ws.vb[i] = state.v[i] + h * ((1.0 - gamma) * ah0 + gamma * ah_base);
-        ws.x[i] = a0;
+        ws.x[i] = a0 + ratio * (a0 - ws.a_prev[i]);
     }
     let map = Affine { t: state.t + h, c_q: h2 * beta * s, c_v: h * gamma * s, h };
     newton::solve(sys, ws, map, settings, false, stats)?;
@@ -52,10 +56,13 @@ pub(crate) fn step_alpha<S: SecondOrderSystem + ?Sized>(
         let ah_base = (alpha_f * state.a[i] - alpha_m * state.a_hat[i]) * d;
         state.a_hat[i] = s * ws.x[i] + ah_base;
     }
+    ws.a_prev.copy_from_slice(&state.a);
+    ws.a_prev_h = h;
     state.q.copy_from_slice(&ws.q);
     state.v.copy_from_slice(&ws.v);
     state.a.copy_from_slice(&ws.x);
     state.t += h;
+    ws.a_prev_next_t = state.t;
     Ok(())
 }
 
