@@ -268,6 +268,8 @@ pub struct Chain {
     /// (links with mass, loads or anchors), or `u32::MAX`.
     pub(crate) link_slot: Vec<u32>,
     pub(crate) links: Vec<LinkScratch>,
+    /// What `link_slot`, `links` and `block` were built for.
+    slot_signature: Option<(usize, usize, usize, usize)>,
     /// Newton tolerance on the coordinate corrections, m or rad (default
     /// 1e-9: a thousandth of a 2 cm steel element's stretch under load).
     pub position_tolerance: f64,
@@ -301,6 +303,7 @@ impl Chain {
             rot_scratch: Vec::new(),
             link_slot: vec![u32::MAX; n],
             links: Vec::new(),
+            slot_signature: None,
             max_frequency: None,
             position_tolerance: 1e-9,
             frames: vec![Frame::default(); n],
@@ -311,6 +314,18 @@ impl Chain {
     /// (called by every residual evaluation; allocation-free once sized).
     fn assign_slots(&mut self) {
         let n = self.joints.len();
+        // The layout only changes with the loads, anchors and springs: skip
+        // the rebuild when their signature is unchanged.
+        let signature = (
+            n,
+            self.loads.iter().fold(self.loads.len(), |acc, l| acc.wrapping_mul(31).wrapping_add(l.link)),
+            self.anchors.iter().fold(self.anchors.len(), |acc, a| acc.wrapping_mul(31).wrapping_add(a.link)),
+            self.rotation_springs.iter().fold(self.rotation_springs.len(), |acc, r| acc.wrapping_mul(31).wrapping_add(r.first)),
+        );
+        if self.slot_signature == Some(signature) {
+            return;
+        }
+        self.slot_signature = Some(signature);
         self.link_slot.resize(n, u32::MAX);
         let mut count = 0u32;
         for s in 0..n {
@@ -467,7 +482,14 @@ impl Chain {
             }
             let fr = &self.frames[s];
             let ls = &mut self.links[slot as usize];
-            *ls = LinkScratch::default();
+            ls.f = V6::ZERO;
+            ls.h = M6::ZERO;
+            ls.inertia = M6::ZERO;
+            if ls.anchored {
+                ls.anchored = false;
+                ls.k_anchor = M6::ZERO;
+                ls.c_anchor = M6::ZERO;
+            }
             if let Some(lm) = &self.joints[s].link {
                 let c = fr.pos + fr.rot * lm.com;
                 let ic = fr.rot * lm.inertia * fr.rot.transpose();
