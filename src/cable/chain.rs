@@ -468,8 +468,12 @@ impl Chain {
     /// writes `−r` into `r` and runs the articulated-body backward sweep
     /// for that right-hand side on the way (finish with `forward_solve`).
     fn sweep(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64], solve: Option<(f64, f64)>) -> Result<(), SystemError> {
-        if let Some(index) = q.iter().chain(v).chain(a).position(|x| !x.is_finite()) {
-            return Err(SystemError::NonFinite { index: index % q.len().max(1) });
+        // One cheap pass: a NaN or infinity anywhere makes the sum non-finite
+        // (then find which coordinate, for the message).
+        if !(q.iter().sum::<f64>() + v.iter().sum::<f64>() + a.iter().sum::<f64>()).is_finite() {
+            if let Some(index) = q.iter().chain(v).chain(a).position(|x| !x.is_finite()) {
+                return Err(SystemError::NonFinite { index: index % q.len().max(1) });
+            }
         }
         self.kinematics(t, q, v, a);
         let n = self.joints.len();
@@ -872,6 +876,14 @@ pub(crate) const BLOCK_INNER: u32 = u32::MAX - 1;
 /// (`2 atan2(|v|, w)` on the quaternion, not `2 acos(w)`, which loses half
 /// the digits near zero).
 pub(crate) fn rotation_vector(r: &DMat3) -> DVec3 {
+    // 2 sin φ · axis = vee(R − Rᵀ); 2 cos φ = tr R − 1.
+    let w = 0.5 * DVec3::new(r.y_axis.z - r.z_axis.y, r.z_axis.x - r.x_axis.z, r.x_axis.y - r.y_axis.x);
+    let s2 = w.length_squared();
+    let c = 0.5 * (r.x_axis.x + r.y_axis.y + r.z_axis.z - 1.0);
+    if c > 0.0 && s2 < 2.5e-3 {
+        // φ/sin φ = asin(s)/s = 1 + s²/6 + 3s⁴/40 + 5s⁶/112 + 35s⁸/1152 (s < 0.05: < 2e-14).
+        return w * (1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * (5.0 / 112.0 + s2 * (35.0 / 1152.0)))));
+    }
     let q = DQuat::from_mat3(r);
     let q = if q.w < 0.0 { -q } else { q };
     let v = DVec3::new(q.x, q.y, q.z);
@@ -882,10 +894,25 @@ pub(crate) fn rotation_vector(r: &DMat3) -> DVec3 {
     v * (2.0 * s.atan2(q.w) / s)
 }
 
+/// `(sin x, cos x)`; Taylor polynomials for |x| < 0.03 (truncation below
+/// 1e-19, i.e. round-off), the library otherwise. Relative rotations of
+/// rope elements are almost always that small.
+#[inline]
+fn small_sin_cos(x: f64) -> (f64, f64) {
+    if x.abs() < 0.03 {
+        let x2 = x * x;
+        let s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
+        let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+        (s, c)
+    } else {
+        x.sin_cos()
+    }
+}
+
 /// `r · R(axis, angle)` for a unit axis; fast paths for the principal axes.
 #[inline]
 fn rotate_about(r: DMat3, axis: DVec3, angle: f64) -> DMat3 {
-    let (sn, cs) = angle.sin_cos();
+    let (sn, cs) = small_sin_cos(angle);
     if axis == DVec3::X {
         DMat3::from_cols(r.x_axis, r.y_axis * cs + r.z_axis * sn, r.z_axis * cs - r.y_axis * sn)
     } else if axis == DVec3::Y {
@@ -1009,4 +1036,9 @@ impl Chain {
         }
         Ok(lambda.max(0.0).sqrt())
     }
+}
+
+#[cfg(test)]
+pub(crate) fn small_sin_cos_for_tests(x: f64) -> (f64, f64) {
+    small_sin_cos(x)
 }

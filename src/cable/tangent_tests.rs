@@ -172,3 +172,23 @@ fn rotation_spring_forces_are_the_energy_gradient() {
     println!("rotation law vs energy gradient: {worst:e}");
     assert!(worst < 1e-7, "{worst}");
 }
+
+/// `rotation_vector` inverts the exponential map to round-off on both of
+/// its branches (small-angle series and quaternion).
+#[test]
+fn rotation_vector_inverts_axis_angle() {
+    let axis = DVec3::new(0.3, -0.8, 0.52).normalize();
+    for phi in [1e-9, 1e-5, 0.01, 0.0499, 0.0501, 0.3, 1.0, 2.5, 3.1] {
+        let theta = super::chain::rotation_vector(&DMat3::from_axis_angle(axis, phi));
+        let err = (theta - axis * phi).length() / phi;
+        assert!(err < 1e-13, "φ = {phi}: relative error {err:e}");
+    }
+}
+
+#[test]
+fn small_angle_sin_cos_is_exact_to_round_off() {
+    for x in [0.0, 1e-12, 1e-6, 0.001, 0.0299, -0.0299, 0.0301, 0.5] {
+        let (s, c) = super::chain::small_sin_cos_for_tests(x);
+        assert!((s - x.sin()).abs() <= 2e-16 * x.abs().max(1e-300) && (c - x.cos()).abs() <= 2.3e-16, "x = {x}");
+    }
+}
