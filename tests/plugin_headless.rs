@@ -189,3 +189,49 @@ fn cable_follows_a_kinematic_body() {
     assert!((top.x - tip_x).abs() < 0.02, "rope top {} vs tip {tip_x}", top.x);
     assert!(p.x > 1.0 && (p.x as f64) < tip_x, "the payload is dragged along and lags behind");
 }
+
+/// A body rapier keeps (dynamic, not carried by the cable) receives the
+/// rope's force every step: in zero gravity a 100 kg body at the start of a
+/// rope pre-stretched by δ = 0.1 m toward a fixed anchor is pulled like a
+/// mass on a spring k = EA/L, x(t) = δ(1 − cos ωt), v(t) = δω sin ωt.
+#[test]
+fn rope_force_acts_on_a_body_rapier_keeps() {
+    let mut app = app();
+    app.update();
+    for mut cfg in app.world_mut().query::<&mut RapierConfiguration>().iter_mut(app.world_mut()) {
+        cfg.gravity = Vec3::ZERO;
+    }
+    let (m, l0, span, ea) = (100.0f32, 9.9f64, 10.0f32, 1e4f64);
+    let w = app.world_mut();
+    let body = w.spawn((RigidBody::Dynamic, Transform::default(), Collider::ball(0.1), ColliderMassProperties::Mass(m), Velocity::zero())).id();
+    let anchor = w.spawn((RigidBody::Fixed, Transform::from_xyz(span, 0.0, 0.0))).id();
+    let cable = w
+        .spawn(CableDescriptor::new(l0, 20, steel(ea, 0.01), 0.01, CableAnchor::Body { entity: body, anchor: Vec3::ZERO, clamp: false }, CableAnchor::Body { entity: anchor, anchor: Vec3::ZERO, clamp: false }))
+        .id();
+    let k = ea / l0;
+    let omega = (k / m as f64).sqrt();
+    let delta = span as f64 - l0;
+    let mut worst: f64 = 0.0;
+    for _ in 0..30 {
+        app.update();
+        let Some(sim) = app.world().get::<CableSim>(cable) else { continue };
+        let t = sim.cable.time();
+        if t <= 0.0 {
+            continue;
+        }
+        let v = app.world().get::<Velocity>(body).unwrap().linear.x as f64;
+        let v_ref = delta * omega * (omega * t).sin();
+        worst = worst.max((v - v_ref).abs() / (delta * omega));
+    }
+    let sim = app.world().get::<CableSim>(cable).unwrap();
+    let x = app.world().get::<Transform>(body).unwrap().translation.x as f64;
+    let t = sim.cable.time();
+    println!("t = {t:.3} s: body x = {x:.5} m (δ(1 − cos ωt) = {:.5}), rope start x = {:.5}; worst velocity error {worst:.2e} of δω", delta * (1.0 - (omega * t).cos()), sim.cable.nodes()[0].x);
+    assert!(!sim.failed);
+    // Explicit exchange lags one step: a phase error of about ωh.
+    let h = DT as f64;
+    assert!(worst < 1.5 * omega * h, "velocity error {worst} vs ωh = {}", omega * h);
+    let x_ref = delta * (1.0 - (omega * t).cos());
+    assert!((x - x_ref).abs() < 0.01 * delta, "position {x} vs {x_ref}");
+    assert!((sim.cable.nodes()[0].x - x).abs() < 1e-3 * delta);
+}

@@ -73,8 +73,13 @@ pub enum CarriedBody {
     Lumped(BodyInChain),
     /// The body moves the cable's base (fixed or kinematic in rapier).
     Base,
-    /// The body is dynamic in rapier and receives the end force (explicit).
+    /// The body is dynamic in rapier and receives the start's reaction
+    /// force (explicit exchange).
     Explicit,
+    /// The body is dynamic in rapier (jointed) and holds the cable's end
+    /// through the implicit anchor spring; it receives the spring's force
+    /// (explicit exchange).
+    ExplicitEnd,
 }
 
 /// Shared pose/velocity of a body that drives a cable base: written by
@@ -97,8 +102,9 @@ pub struct CableSim {
     pub cable: Cable,
     /// Bodies coupled to the cable and how.
     pub bodies: Vec<(Entity, CarriedBody)>,
-    /// Base sample shared with the cable's base motion (moving bases).
-    pub(crate) base: Option<(Entity, Vec3, Arc<Mutex<BaseSample>>)>,
+    /// Samples of the bodies that move the cable's base or end target,
+    /// shared with the cable's motion closures.
+    pub(crate) samples: Vec<(Entity, Vec3, Arc<Mutex<BaseSample>>)>,
     /// Stopped after a divergence.
     pub failed: bool,
 }

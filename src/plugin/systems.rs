@@ -79,7 +79,7 @@ pub(crate) fn init_cables(
         let bodies_set = &mut ctx.rigidbody_set.bodies;
         let body = |e: Entity| handles.get(e).ok().and_then(|h| bodies_set.get(h.0));
         let mut carried = Vec::new();
-        let mut base_link = None;
+        let mut samples = Vec::new();
         // Start.
         let (start, start_point) = match &d.start {
             CableAnchor::Free => {
@@ -116,7 +116,7 @@ pub(crate) fn init_cables(
                     (kind, _) => {
                         let shared = Arc::new(Mutex::new(sample));
                         carried.push((*be, if kind == RigidBodyType::Dynamic { CarriedBody::Explicit } else { CarriedBody::Base }));
-                        base_link = Some((*be, *anchor, shared.clone()));
+                        samples.push((*be, *anchor, shared.clone()));
                         let b = follow(shared);
                         (if *clamp { RopeStart::Clamped(b) } else { RopeStart::Pinned(b) }, sample.position)
                     }
@@ -144,20 +144,27 @@ pub(crate) fn init_cables(
                 if rb.body_type() == RigidBodyType::Dynamic && joints.get(*be).is_err() {
                     carried.push((*be, CarriedBody::Lumped(BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO })));
                     RopeEnd::Body { body: lumped_of(rb), anchor: anchor.as_dvec3(), clamp: *clamp }
-                } else if rb.body_type() != RigidBodyType::Fixed {
-                    fail(format!("end body {be}: a cable end on a kinematic body or on a jointed dynamic body is not supported yet"));
-                    commands.entity(entity).remove::<CableDescriptor>();
-                    continue;
                 } else {
-                    let p = sample.position;
-                    let t: Target = Arc::new(move |_| (p, DVec3::ZERO));
+                    // A fixed, kinematic or jointed dynamic body: the end's
+                    // implicit anchor spring follows the body's point.
+                    let shared = Arc::new(Mutex::new(sample));
+                    samples.push((*be, *anchor, shared.clone()));
+                    if rb.body_type() == RigidBodyType::Dynamic {
+                        carried.push((*be, CarriedBody::ExplicitEnd));
+                    } else {
+                        carried.push((*be, CarriedBody::Base));
+                    }
+                    let BaseMotion::Prescribed(f) = follow(shared) else { unreachable!("follow() is prescribed") };
+                    let t: Target = Arc::new(move |t| {
+                        let s = f(t);
+                        (s.position, s.velocity)
+                    });
                     if *clamp { RopeEnd::Clamped(t) } else { RopeEnd::Pinned(t) }
                 }
             }
         };
         let path = match (&d.path, end_point) {
             (Some(p), _) => p.iter().map(|v| v.as_dvec3()).collect(),
-            (None, Some(e)) if !matches!(end, RopeEnd::Body { .. }) => vec![start_point, e],
             (None, Some(e)) => vec![start_point, e],
             (None, None) => vec![start_point, start_point - DVec3::Y * d.length],
         };
@@ -206,7 +213,7 @@ pub(crate) fn init_cables(
                 }
             }
         }
-        commands.entity(entity).insert((CableSim { cable, bodies: carried, base: base_link, failed: false }, CableState::default()));
+        commands.entity(entity).insert((CableSim { cable, bodies: carried, samples, failed: false }, CableState::default()));
     }
 }
 
@@ -215,15 +222,16 @@ pub(crate) fn read_bodies(mut cables: Query<&mut CableSim>, ctx: ReadRapierConte
     let Ok(ctx) = ctx.single() else { return };
     let dt = time.delta_secs_f64().max(1e-9);
     for sim in &mut cables {
-        let Some((be, anchor, shared)) = &sim.base else { continue };
-        let Some(rb) = handles.get(*be).ok().and_then(|h| ctx.rigidbody_set.bodies.get(h.0)) else { continue };
-        let mut s = sample_body(rb, *anchor);
-        let mut guard = shared.lock().unwrap_or_else(|e| e.into_inner());
-        s.t0 = sim.cable.time();
-        if sim.cable.steps > 0 {
-            s.acceleration = (s.velocity - guard.velocity) / dt;
+        for (be, anchor, shared) in &sim.samples {
+            let Some(rb) = handles.get(*be).ok().and_then(|h| ctx.rigidbody_set.bodies.get(h.0)) else { continue };
+            let mut s = sample_body(rb, *anchor);
+            let mut guard = shared.lock().unwrap_or_else(|e| e.into_inner());
+            s.t0 = sim.cable.time();
+            if sim.cable.steps > 0 {
+                s.acceleration = (s.velocity - guard.velocity) / dt;
+            }
+            *guard = s;
         }
-        *guard = s;
     }
 }
 
@@ -278,6 +286,18 @@ pub(crate) fn write_bodies(cables: Query<&CableSim>, mut ctx: WriteRapierContext
                     let (p, r, _, _) = sim.cable.model.body_state(b);
                     let q = glam::DQuat::from_mat3(&r).as_quat();
                     rb.set_next_kinematic_position(bevy_rapier3d::rapier::math::Pose::from_parts(p.as_vec3(), q));
+                }
+                CarriedBody::ExplicitEnd if !sim.failed => {
+                    // The anchor spring pulls the chain with F; the body gets −F
+                    // at its point.
+                    let ch = &sim.cable.model.chain;
+                    if let Some(an) = ch.anchors.first() {
+                        let p = ch.link_point(an.link, an.local_point);
+                        let pv = ch.link_point_velocity(an.link, an.local_point);
+                        let (target, target_v) = (an.target)(sim.cable.time());
+                        let force = -(p - target) * an.stiffness - (pv - target_v) * an.damping;
+                        rb.apply_impulse_at_point((-force * dt).as_vec3(), target.as_vec3(), true);
+                    }
                 }
                 CarriedBody::Explicit if !sim.failed => {
                     // The chain pulls its base with the composite load at
