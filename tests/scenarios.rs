@@ -139,3 +139,39 @@ component = "x"
     assert!((row[0] - 0.5).abs() < 2.5e-3);
     assert!((worst_sway - expected).abs() / expected < 0.03, "sway {worst_sway} vs {expected}");
 }
+
+/// Period from upward zero crossings of column `col` about its mean.
+fn period_of(rows: &[Vec<f64>], col: usize) -> f64 {
+    let mean = rows.iter().map(|r| r[col]).sum::<f64>() / rows.len() as f64;
+    let ups: Vec<f64> = (1..rows.len())
+        .filter(|&k| rows[k - 1][col] < mean && rows[k][col] >= mean)
+        .map(|k| {
+            let (a, b) = (rows[k - 1][col] - mean, rows[k][col] - mean);
+            rows[k - 1][0] + (rows[k][0] - rows[k - 1][0]) * (-a) / (b - a)
+        })
+        .collect();
+    (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64
+}
+
+/// verification-cases §3b from a scenario file: the hanging chain's first
+/// Bessel frequency ω₁ = 1.190935 rad/s (L = 10 m).
+#[test]
+fn hanging_chain_scenario_bessel_frequency() {
+    let (_, rows) = run("assets/scenarios/hanging_chain.toml");
+    let omega = 2.0 * std::f64::consts::PI / period_of(&rows, 1);
+    let err = (omega - 1.190935) / 1.190935;
+    println!("ω₁ {omega:.6} rad/s (1.190935): {err:+.2e}");
+    assert!(err.abs() < 2e-3);
+}
+
+/// verification-cases §5a from a scenario file: 60° pendulum at 1/60 s.
+#[test]
+fn pendulum_scenario_large_amplitude_period() {
+    let (_, rows) = run("assets/scenarios/pendulum_60deg.toml");
+    let t0 = 2.0 * std::f64::consts::PI * (10.01f64 / 9.81).sqrt();
+    let exact = t0 * 1.073182;
+    let period = period_of(&rows, 1);
+    let err = (period - exact) / exact;
+    println!("period {period:.5} s ({exact:.5}): {err:+.2e}");
+    assert!(err.abs() < 5e-4);
+}
