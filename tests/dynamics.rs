@@ -237,3 +237,18 @@ fn compound_pendulum_of_a_stiff_rod() {
         assert!(err.abs() < 1e-3, "period error {err}");
     }
 }
+
+/// The reported pose of a ball-jointed payload: its centre is at
+/// rope end + R_body·(−anchor), whatever the rope's direction.
+#[test]
+fn payload_pose_is_reported_where_the_body_is() {
+    let a: f64 = 30f64.to_radians();
+    let dir = DVec3::new(a.sin(), -a.cos(), 0.0);
+    let body_pos = dir * 20.3;
+    let model = pendulum(20.0, 10, section(1.6, 2e7, 50.0, 35.0), 1000.0, 0.3, a);
+    let b = model.layout.end_body.unwrap();
+    let (p, r, _, _) = model.body_state(&b);
+    println!("payload reported at {p:?}, placed at {body_pos:?}");
+    assert!(p.distance(body_pos) < 1e-9);
+    assert!((r - DMat3::IDENTITY).abs_diff_eq(DMat3::ZERO, 1e-12));
+}

@@ -477,7 +477,10 @@ impl RopeBuilder {
                     let jx = spring(JointKind::Revolute, DVec3::X, 0.0, Some(local));
                     joints.extend([jz, jy, jx]);
                     q0.extend([0.0, 0.0, 0.0]);
-                    end_body = Some(BodyInChain { link: joints.len() - 1, rotation: DMat3::IDENTITY, origin: -*anchor });
+                    // The link frame is the last element's frame (no
+                    // pre-rotation at the ball joint): the body frame sits at
+                    // rotation c and origin −c·anchor in it.
+                    end_body = Some(BodyInChain { link: joints.len() - 1, rotation: c, origin: -(c * *anchor) });
                 }
             }
         }
