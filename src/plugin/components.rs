@@ -32,7 +32,9 @@ pub enum CableAnchor {
 
 /// Spawn an entity with this to get a cable. The plugin builds it at the
 /// next fixed step (after rapier created the bodies it hangs on) and adds
-/// [`CableSim`] and [`CableState`].
+/// [`CableSim`] and [`CableState`]. The cable starts at rest relative to its
+/// base: a base that already moves carries the whole cable (and the bodies
+/// it carries) along at its velocity.
 #[derive(Component, Debug, Clone)]
 pub struct CableDescriptor {
     /// Unstretched length, m.
