@@ -10,10 +10,15 @@
 //! bending about local z then y (`EI/L_e`, or `EI2/L_e`), torsion about the
 //! element axis x (`GJ/L_e`), then the axial slide (`EA/L_e`, engineering
 //! strain: the gap is `ε L_e`) and two shear slides (`GA/L_e`). The local x
-//! axis of each element is its tangent. Relative rotations are Euler angles
-//! z–y–x of the relative rotation, small for every element of a converged
+//! axis of each element is its tangent. The coordinates of the relative
+//! rotation are Euler angles z–y–x, small for every element of a converged
 //! discretisation; large overall rotations are carried by the recursion, so
-//! geometric nonlinearity is exact as `N → ∞`.
+//! geometric nonlinearity is exact as `N → ∞`. Bending and torsion act
+//! through one objective law on the rotation vector of the relative rotation
+//! ([`RotationSpring`]: energy ½θᵀ diag(GJ, EI₂, EI)/L_e θ), not a spring
+//! per angle. A pinned start has free bending and a per-angle torsion
+//! spring (2GJ/L_e: the half element up to the pin); a clamp doubles the
+//! first joint's stiffnesses likewise.
 
 use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkMass, RotationSpring, SubJoint};
 use super::material::RopeSection;
