@@ -175,3 +175,14 @@ fn pendulum_scenario_large_amplitude_period() {
     println!("period {period:.5} s ({exact:.5}): {err:+.2e}");
     assert!(err.abs() < 5e-4);
 }
+
+/// What the runner cannot simulate yet is refused with the file position,
+/// never silently dropped: an initial velocity of a dynamic body.
+#[test]
+fn unsupported_initial_velocity_is_refused_with_its_position() {
+    let src = std::fs::read_to_string("assets/scenarios/pendulum_60deg.toml").unwrap().replace("mass = 1000.0", "mass = 1000.0\nlinear_velocity = [1.0, 0.0, 0.0]");
+    let sc = scenario::parse(&src, "v.toml").unwrap_or_else(|e| panic!("{e}"));
+    let err = World::new(sc).unwrap_err().to_string();
+    println!("{err}");
+    assert!(err.contains("v.toml:8:1") && err.contains("initial velocity") && err.contains("bob"), "{err}");
+}

@@ -145,6 +145,13 @@ impl World {
         for c in &scenario.cables {
             cables.push(build_cable(&scenario, c, &scheme, &file)?);
         }
+        // Initial body velocities are not mapped into the chains' relative
+        // rates yet: refuse rather than silently start at rest.
+        for b in scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
+            if b.linear_velocity != DVec3::ZERO || b.angular_velocity != DVec3::ZERO {
+                return Err(unsupported(b.location, format!("an initial velocity of dynamic body `{}`", b.name)));
+            }
+        }
         // Every dynamic body must be carried by exactly one cable.
         for b in scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
             let holders = cables.iter().filter(|c| c.bodies.iter().any(|(n, _)| *n == b.name)).count();
