@@ -186,3 +186,17 @@ fn unsupported_initial_velocity_is_refused_with_its_position() {
     println!("{err}");
     assert!(err.contains("v.toml:8:1") && err.contains("initial velocity") && err.contains("bob"), "{err}");
 }
+
+/// verification-cases §3a from a scenario file: the taut string's first
+/// frequency, f₁ = c/(2L) = 1.581139 Hz (the rigid-element model is
+/// +θ²/24 = +2.6e-4 above the continuum at 40 elements).
+#[test]
+fn taut_string_scenario_first_frequency() {
+    let (_, rows) = run("assets/scenarios/taut_string.toml");
+    let f = 1.0 / period_of(&rows, 1);
+    let t_mean = rows.iter().map(|r| r[2]).sum::<f64>() / rows.len() as f64;
+    let err = (f - 1.581139) / 1.581139;
+    println!("f₁ {f:.6} Hz (1.581139): {err:+.2e}; mean tension {t_mean:.2} N");
+    assert!((err - 2.6e-4).abs() < 5e-5, "{err}");
+    assert!((t_mean - 1000.0).abs() < 1.0);
+}
