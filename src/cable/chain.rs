@@ -383,17 +383,24 @@ impl Chain {
             let fr = &mut self.frames[s];
             let rj = if j.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * j.pre_rotation };
             let pj = if j.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * j.offset };
-            let aw = if j.axis == DVec3::X {
-                rj.x_axis
+            // Principal axes (every rope sub-joint) are column picks.
+            let axis_id = if j.axis == DVec3::X {
+                0
             } else if j.axis == DVec3::Y {
-                rj.y_axis
+                1
             } else if j.axis == DVec3::Z {
-                rj.z_axis
+                2
             } else {
-                rj * j.axis
+                3
+            };
+            let aw = match axis_id {
+                0 => rj.x_axis,
+                1 => rj.y_axis,
+                2 => rj.z_axis,
+                _ => rj * j.axis,
             };
             let (sv, rot, pos) = match j.kind {
-                JointKind::Revolute => (V6::new(aw, pj.cross(aw)), rotate_about(rj, j.axis, q[s]), pj),
+                JointKind::Revolute => (V6::new(aw, pj.cross(aw)), rotate_about_id(rj, axis_id, j.axis, q[s]), pj),
                 JointKind::Prismatic => (V6::new(DVec3::ZERO, aw), rj, pj + aw * q[s]),
             };
             let vel = prev_vel + sv * v[s];
@@ -915,15 +922,28 @@ fn small_sin_cos(x: f64) -> (f64, f64) {
 /// `r · R(axis, angle)` for a unit axis; fast paths for the principal axes.
 #[inline]
 fn rotate_about(r: DMat3, axis: DVec3, angle: f64) -> DMat3 {
-    let (sn, cs) = small_sin_cos(angle);
-    if axis == DVec3::X {
-        DMat3::from_cols(r.x_axis, r.y_axis * cs + r.z_axis * sn, r.z_axis * cs - r.y_axis * sn)
+    let id = if axis == DVec3::X {
+        0
     } else if axis == DVec3::Y {
-        DMat3::from_cols(r.x_axis * cs - r.z_axis * sn, r.y_axis, r.x_axis * sn + r.z_axis * cs)
+        1
     } else if axis == DVec3::Z {
-        DMat3::from_cols(r.x_axis * cs + r.y_axis * sn, r.y_axis * cs - r.x_axis * sn, r.z_axis)
+        2
     } else {
-        r * DMat3::from_axis_angle(axis, angle)
+        3
+    };
+    rotate_about_id(r, id, axis, angle)
+}
+
+/// [`rotate_about`] with the axis already classified (0, 1, 2 = x, y, z;
+/// anything else = the general `axis`).
+#[inline]
+fn rotate_about_id(r: DMat3, id: u8, axis: DVec3, angle: f64) -> DMat3 {
+    let (sn, cs) = small_sin_cos(angle);
+    match id {
+        0 => DMat3::from_cols(r.x_axis, r.y_axis * cs + r.z_axis * sn, r.z_axis * cs - r.y_axis * sn),
+        1 => DMat3::from_cols(r.x_axis * cs - r.z_axis * sn, r.y_axis, r.x_axis * sn + r.z_axis * cs),
+        2 => DMat3::from_cols(r.x_axis * cs + r.y_axis * sn, r.y_axis * cs - r.x_axis * sn, r.z_axis),
+        _ => r * DMat3::from_axis_angle(axis, angle),
     }
 }
 
