@@ -573,18 +573,7 @@ impl Chain {
                 None => r[s] = res,
                 Some((c_v, c_q)) => {
                     r[s] = -res;
-                    match self.block[s] {
-                        u32::MAX => aba.down(s, j, fr, ls, c_v, c_q, -res)?,
-                        BLOCK_INNER => {}
-                        k => {
-                            if let Some(ls) = ls {
-                                aba.add_link(ls, c_v, c_q);
-                            }
-                            let rs = &self.rotation_springs[k as usize];
-                            let (a_mat, pinv) = &mut self.rot_scratch[k as usize];
-                            aba.down_block(s, &mut self.frames[s..s + 3], rs, a_mat, pinv, c_v, c_q, [r[s], r[s + 1], r[s + 2]])?;
-                        }
-                    }
+                    self.eliminate(&mut aba, s, c_v, c_q, r)?;
                 }
             }
         }
@@ -603,27 +592,33 @@ impl Chain {
     pub fn solve_into(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         let mut aba = AbaCarry::default();
         for s in (0..self.joints.len()).rev() {
-            let slot = self.link_slot[s];
-            let ls = (slot != u32::MAX).then(|| &self.links[slot as usize]);
-            match self.block[s] {
-                u32::MAX => aba.down(s, &self.joints[s], &mut self.frames[s], ls, c_v, c_q, b[s])?,
-                BLOCK_INNER => {
-                    if let Some(ls) = ls {
-                        aba.add_link(ls, c_v, c_q);
-                    }
-                }
-                k => {
-                    if let Some(ls) = ls {
-                        aba.add_link(ls, c_v, c_q);
-                    }
-                    let rs = &self.rotation_springs[k as usize];
-                    let (a_mat, pinv) = &mut self.rot_scratch[k as usize];
-                    aba.down_block(s, &mut self.frames[s..s + 3], rs, a_mat, pinv, c_v, c_q, [b[s], b[s + 1], b[s + 2]])?;
-                }
-            }
+            self.eliminate(&mut aba, s, c_v, c_q, b)?;
         }
         self.forward_solve(x);
         Ok(())
+    }
+
+    /// Tip-to-base elimination of sub-joint `s` (right-hand side `b`): a
+    /// single sub-joint, the second or third sub-joint of a rotation-spring
+    /// block (only its link is added; the block is eliminated at its first
+    /// sub-joint), or a whole block.
+    fn eliminate(&mut self, aba: &mut AbaCarry, s: usize, c_v: f64, c_q: f64, b: &[f64]) -> Result<(), SystemError> {
+        let slot = self.link_slot[s];
+        let ls = (slot != u32::MAX).then(|| &self.links[slot as usize]);
+        match self.block[s] {
+            u32::MAX => aba.down(s, &self.joints[s], &mut self.frames[s], ls, c_v, c_q, b[s]),
+            k => {
+                if let Some(ls) = ls {
+                    aba.add_link(ls, c_v, c_q);
+                }
+                if k == BLOCK_INNER {
+                    return Ok(());
+                }
+                let rs = &self.rotation_springs[k as usize];
+                let (a_mat, pinv) = &mut self.rot_scratch[k as usize];
+                aba.down_block(s, &mut self.frames[s..s + 3], rs, a_mat, pinv, c_v, c_q, [b[s], b[s + 1], b[s + 2]])
+            }
+        }
     }
 
     /// Base-to-tip half of the articulated-body solve.

@@ -192,3 +192,33 @@ fn small_angle_sin_cos_is_exact_to_round_off() {
         assert!((s - x.sin()).abs() <= 2e-16 * x.abs().max(1e-300) && (c - x.cos()).abs() <= 2.3e-16, "x = {x}");
     }
 }
+
+/// The fused residual + correction and the separate residual then solve are
+/// one elimination: same correction, also with an implicit anchor spring on
+/// the last link of a rotation-spring block (whose inertia the fused path
+/// once dropped).
+#[test]
+fn fused_and_separate_solves_agree() {
+    let mut m = loaded_rope(payload(), true);
+    m.chain.rotation_springs = {
+        let mut b = RopeBuilder::new(1.2, 5, soft_section(), 0.05).path(bent_path()).build().unwrap();
+        std::mem::take(&mut b.chain.rotation_springs)
+    };
+    let link = m.layout.dof(2, 2);
+    let p = m.chain.link_point(link, DVec3::ZERO);
+    m.chain.anchors.push(AnchorSpring { link, local_point: DVec3::ZERO, target: Arc::new(move |_| (p, DVec3::ZERO)), stiffness: 500.0, damping: 5.0, rotation: None });
+    let n = m.chain.len();
+    let mut rng = Lcg(33);
+    let q: Vec<f64> = m.q0.iter().map(|x| x + 0.02 * rng.next()).collect();
+    let v: Vec<f64> = (0..n).map(|_| 0.1 * rng.next()).collect();
+    let a: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+    let (mut rhs, mut x1, mut r, mut x2) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    m.chain.residual_and_correction_into(0.0, &q, &v, &a, 0.01, 1e-4, &mut rhs, &mut x1).unwrap();
+    m.chain.residual_into(0.0, &q, &v, &a, &mut r).unwrap();
+    let b: Vec<f64> = r.iter().map(|x| -x).collect();
+    m.chain.solve_into(0.01, 1e-4, &b, &mut x2).unwrap();
+    let scale = x2.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = x1.iter().zip(&x2).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(rhs.iter().zip(&b).all(|(a, b)| a == b));
+    assert!(diff <= 1e-12 * scale, "fused and separate corrections differ by {diff:e} (scale {scale:e})");
+}
