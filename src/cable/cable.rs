@@ -180,9 +180,7 @@ impl Cable {
         let ch = &self.model.chain;
         let mut out: Vec<DVec3> = (0..l.elements)
             .map(|i| {
-                let s = l.dof(i, 0);
-                let fr = &ch.frames[s];
-                fr.vel.bot + fr.vel.top.cross(fr.joint_point)
+                ch.joint_point_velocity(l.dof(i, 0))
             })
             .collect();
         if l.free_start {

@@ -194,23 +194,23 @@ pub struct LinkLoad {
     pub moment: DVec3,
 }
 
-/// Per sub-joint scratch, rebuilt by every residual evaluation.
+/// Pose of a sub-joint's link, rebuilt by every kinematics pass.
 #[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Frame {
+pub(crate) struct Pose {
     /// Link orientation.
     pub rot: DMat3,
     /// Link origin (relative to the chain origin).
     pub pos: DVec3,
-    /// Joint point (relative to the chain origin).
-    pub joint_point: DVec3,
-    /// Motion subspace.
-    pub s: V6,
     /// Link spatial velocity.
     pub vel: V6,
-    /// Link spatial acceleration.
-    pub acc: V6,
-    /// Composite load on this link and everything outboard (spatial force).
-    pub fc: V6,
+}
+
+/// What the tip-to-base sweep and the solve need per sub-joint (written by
+/// the kinematics pass, so the sweep and the solve stream this array alone).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Row {
+    /// Motion subspace.
+    pub s: V6,
     /// `G_s S_s`: the geometric-stiffness term the solve needs (see
     /// [`Chain::solve_into`]).
     pub gs: V6,
@@ -218,21 +218,48 @@ pub(crate) struct Frame {
     pub u_vec: V6,
     pub d: f64,
     pub u: f64,
+    /// Elastic + damping generalized force, N or N·m.
+    pub elastic: f64,
+    /// The sub-joint's stiffness and damping (its armature in the solve).
+    pub stiffness: f64,
+    pub damping: f64,
 }
 
-/// Scratch of a link with mass or with loads (a few per element at most).
-#[derive(Debug, Clone, Copy, Default)]
+/// Scratch of a link with mass or with loads (one per element, and the
+/// bodies). The spatial inertia `[[ia, ib], [ibᵀ, m 1]]` and the load
+/// tangent `[[ha, hb], [0, 0]]` are kept as their non-trivial blocks.
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct LinkScratch {
-    /// Spatial inertia (zero for massless links).
-    pub inertia: M6,
+    pub ia: DMat3,
+    pub ib: DMat3,
+    pub m: f64,
     /// Loads on this link alone (spatial force).
     pub f: V6,
-    /// Load tangent `Σ B̃` of this link's loads.
-    pub h: M6,
-    /// Implicit stiffness and damping of anchor springs on this link.
-    pub k_anchor: M6,
-    pub c_anchor: M6,
-    pub anchored: bool,
+    /// Load tangent `Σ B̃` of this link's loads (upper blocks).
+    pub ha: DMat3,
+    pub hb: DMat3,
+    /// Index into [`Chain::anchor_blocks`], or `u32::MAX`.
+    pub anchor: u32,
+}
+
+impl Default for LinkScratch {
+    fn default() -> Self {
+        LinkScratch { ia: DMat3::ZERO, ib: DMat3::ZERO, m: 0.0, f: V6::ZERO, ha: DMat3::ZERO, hb: DMat3::ZERO, anchor: u32::MAX }
+    }
+}
+
+impl LinkScratch {
+    fn clear(&mut self) {
+        let anchor = self.anchor;
+        *self = LinkScratch { anchor, ..Default::default() };
+    }
+    /// Adds the load tangent `B̃` of a force of fixed direction at `p`.
+    #[inline]
+    fn add_point_load_tangent(&mut self, force: DVec3, p: DVec3) {
+        let t = M6::point_load_tangent(force, p);
+        self.ha += t.a;
+        self.hb += t.b;
+    }
 }
 
 /// A serial chain of one-DOF sub-joints (see the module docs).
@@ -257,18 +284,22 @@ pub struct Chain {
     /// Objective bending–torsion laws replacing the per-angle springs of
     /// their sub-joints.
     pub rotation_springs: Vec<RotationSpring>,
-    /// Elastic + damping generalized force of each sub-joint (scratch).
-    pub(crate) elastic: Vec<f64>,
     /// Per sub-joint: index of the rotation spring whose block starts here,
     /// [`BLOCK_INNER`] inside a block, `u32::MAX` for a single sub-joint.
     pub(crate) block: Vec<u32>,
     /// Per rotation spring: `A = ∂θ/∂(a, b, c)` and the block pivot inverse.
     pub(crate) rot_scratch: Vec<(DMat3, DMat3)>,
+    /// Rotation springs in the order of their last sub-joint (the
+    /// kinematics pass evaluates each one there).
+    spring_order: Vec<u32>,
     /// For each sub-joint, the index of its link's scratch in `links`
     /// (links with mass, loads or anchors), or `u32::MAX`.
     pub(crate) link_slot: Vec<u32>,
     pub(crate) links: Vec<LinkScratch>,
-    /// What `link_slot`, `links` and `block` were built for.
+    /// Implicit stiffness and damping blocks of the anchor springs, one
+    /// entry per anchored link.
+    pub(crate) anchor_blocks: Vec<(M6, M6)>,
+    /// What `link_slot`, `links`, `block` and `spring_order` were built for.
     slot_signature: Option<(usize, usize, usize, usize)>,
     /// Newton tolerance on the coordinate corrections, m or rad (default
     /// 1e-9: a thousandth of a 2 cm steel element's stretch under load).
@@ -279,7 +310,13 @@ pub struct Chain {
     /// Upper estimate of the highest natural frequency, rad/s (for explicit
     /// schemes' sub-steps); `None` if unknown.
     pub max_frequency: Option<f64>,
-    pub(crate) frames: Vec<Frame>,
+    pub(crate) poses: Vec<Pose>,
+    pub(crate) rows: Vec<Row>,
+    /// Base pose at the last kinematics pass (position relative to `origin`).
+    base_pose: (DMat3, DVec3),
+    /// Composite load on the whole chain at the last residual (spatial
+    /// force about `origin`).
+    base_load: V6,
 }
 
 impl std::fmt::Debug for Chain {
@@ -301,15 +338,19 @@ impl Chain {
             loads: Vec::new(),
             joint_forces: vec![0.0; n],
             rotation_springs: Vec::new(),
-            elastic: vec![0.0; n],
             block: vec![u32::MAX; n],
             rot_scratch: Vec::new(),
+            spring_order: Vec::new(),
             link_slot: vec![u32::MAX; n],
             links: Vec::new(),
+            anchor_blocks: Vec::new(),
             slot_signature: None,
             max_frequency: None,
             position_tolerance: 1e-9,
-            frames: vec![Frame::default(); n],
+            poses: vec![Pose::default(); n],
+            rows: vec![Row::default(); n],
+            base_pose: (DMat3::IDENTITY, DVec3::ZERO),
+            base_load: V6::ZERO,
         }
     }
 
@@ -325,10 +366,13 @@ impl Chain {
             self.anchors.iter().fold(self.anchors.len(), |acc, a| acc.wrapping_mul(31).wrapping_add(a.link)),
             self.rotation_springs.iter().fold(self.rotation_springs.len(), |acc, r| acc.wrapping_mul(31).wrapping_add(r.first)),
         );
-        if self.slot_signature == Some(signature) {
+        if self.slot_signature == Some(signature) && self.poses.len() == n {
             return;
         }
         self.slot_signature = Some(signature);
+        self.poses.resize(n, Pose::default());
+        self.rows.resize(n, Row::default());
+        self.link_slot.clear();
         self.link_slot.resize(n, u32::MAX);
         let mut count = 0u32;
         for s in 0..n {
@@ -341,7 +385,16 @@ impl Chain {
                 count += 1;
             }
         }
+        self.links.clear();
         self.links.resize(count as usize, LinkScratch::default());
+        self.anchor_blocks.clear();
+        for an in &self.anchors {
+            let ls = &mut self.links[self.link_slot[an.link] as usize];
+            if ls.anchor == u32::MAX {
+                ls.anchor = self.anchor_blocks.len() as u32;
+                self.anchor_blocks.push((M6::ZERO, M6::ZERO));
+            }
+        }
         // Rotation-spring blocks: three revolute sub-joints solved together
         // (their elastic law couples them), when no mass or load sits on the
         // two links between them.
@@ -356,6 +409,9 @@ impl Chain {
                 self.block[f + 2] = BLOCK_INNER;
             }
         }
+        self.spring_order.clear();
+        self.spring_order.extend((0..self.rotation_springs.len() as u32).filter(|&k| self.rotation_springs[k as usize].first + 2 < n));
+        self.spring_order.sort_by_key(|&k| self.rotation_springs[k as usize].first);
     }
 
     /// Number of sub-joints (= generalized coordinates).
@@ -368,8 +424,12 @@ impl Chain {
         self.joints.is_empty()
     }
 
-    /// Forward kinematics and velocities/accelerations only (no loads).
+    /// One base-to-tip pass: forward kinematics, velocities and
+    /// accelerations; the d'Alembert and gravity loads of every link with
+    /// mass; every sub-joint's elastic force (rotation springs at their
+    /// last sub-joint). Loads of other links are cleared.
     pub(crate) fn kinematics(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64]) {
+        self.assign_slots();
         let base = self.base.at(t);
         let bp = base.position - self.origin;
         let bw = base.angular_velocity;
@@ -379,8 +439,9 @@ impl Chain {
             V6::new(base.angular_acceleration, base.acceleration - base.angular_acceleration.cross(bp) - bw.cross(base.velocity));
         let mut prev_rot = base.rotation;
         let mut prev_pos = bp;
+        self.base_pose = (prev_rot, prev_pos);
+        let mut next_spring = 0;
         for (s, j) in self.joints.iter().enumerate() {
-            let fr = &mut self.frames[s];
             let rj = if j.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * j.pre_rotation };
             let pj = if j.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * j.offset };
             // Principal axes (every rope sub-joint) are column picks.
@@ -405,12 +466,47 @@ impl Chain {
             };
             let vel = prev_vel + sv * v[s];
             let acc = prev_acc + prev_vel.cross_motion(sv) * v[s] + sv * a[s];
-            fr.rot = rot;
-            fr.pos = pos;
-            fr.joint_point = pj;
-            fr.s = sv;
-            fr.vel = vel;
-            fr.acc = acc;
+            self.poses[s] = Pose { rot, pos, vel };
+            let row = &mut self.rows[s];
+            row.s = sv;
+            row.stiffness = j.stiffness;
+            row.damping = j.damping;
+            row.elastic = j.stiffness * (q[s] - j.rest) + j.damping * v[s];
+            let slot = self.link_slot[s];
+            if slot != u32::MAX {
+                let ls = &mut self.links[slot as usize];
+                ls.clear();
+                if let Some(lm) = &j.link {
+                    // d'Alembert + gravity at the centre of mass.
+                    let c = pos + rot * lm.com;
+                    let ic = rot * lm.inertia * rot.transpose();
+                    let w = vel.top;
+                    let vc = vel.bot + w.cross(c);
+                    let alpha = acc.top;
+                    let ac = acc.bot + alpha.cross(c) + w.cross(vc);
+                    let force = (self.gravity - ac) * lm.mass;
+                    let moment = -(ic * alpha + w.cross(ic * w));
+                    ls.f = V6::new(c.cross(force) + moment, force);
+                    ls.add_point_load_tangent(force, c);
+                    let cx = skew(c);
+                    ls.ia = ic + cx * cx.transpose() * lm.mass;
+                    ls.ib = cx * lm.mass;
+                    ls.m = lm.mass;
+                }
+            }
+            // A rotation spring whose three sub-joints are now known.
+            while let Some(&k) = self.spring_order.get(next_spring) {
+                let rs = self.rotation_springs[k as usize];
+                if rs.first + 2 > s {
+                    break;
+                }
+                next_spring += 1;
+                let (forces, a_mat) = rotation_spring_forces(&rs, &self.joints, q, v);
+                for (i, fi) in forces.iter().enumerate() {
+                    self.rows[rs.first + i].elastic = *fi;
+                }
+                self.rot_scratch[k as usize].0 = a_mat;
+            }
             prev_vel = vel;
             prev_acc = acc;
             prev_rot = rot;
@@ -421,30 +517,47 @@ impl Chain {
     /// World position of a point given in the frame of link `s` (after the
     /// last kinematics evaluation), m.
     pub fn link_point(&self, s: usize, local: DVec3) -> DVec3 {
-        let fr = &self.frames[s];
-        fr.pos + fr.rot * local + self.origin
+        let p = &self.poses[s];
+        p.pos + p.rot * local + self.origin
     }
 
     /// World velocity of a point given in the frame of link `s`, m/s.
     pub fn link_point_velocity(&self, s: usize, local: DVec3) -> DVec3 {
-        let fr = &self.frames[s];
-        let p = fr.pos + fr.rot * local;
-        fr.vel.bot + fr.vel.top.cross(p)
+        let ps = &self.poses[s];
+        let p = ps.pos + ps.rot * local;
+        ps.vel.bot + ps.vel.top.cross(p)
     }
 
     /// Orientation of link `s` (after the last kinematics evaluation).
     pub fn link_rotation(&self, s: usize) -> DMat3 {
-        self.frames[s].rot
+        self.poses[s].rot
     }
 
     /// Spatial velocity of link `s` (about the chain origin).
     pub fn link_velocity(&self, s: usize) -> V6 {
-        self.frames[s].vel
+        self.poses[s].vel
     }
 
     /// Joint point of sub-joint `s` in the world, m.
     pub fn joint_point(&self, s: usize) -> DVec3 {
-        self.frames[s].joint_point + self.origin
+        let (rot, pos) = if s == 0 { self.base_pose } else { (self.poses[s - 1].rot, self.poses[s - 1].pos) };
+        let offset = self.joints[s].offset;
+        pos + rot * offset + self.origin
+    }
+
+    /// World velocity of sub-joint `s`'s joint point, m/s.
+    pub fn joint_point_velocity(&self, s: usize) -> DVec3 {
+        let p = self.joint_point(s) - self.origin;
+        let vel = self.poses[s].vel;
+        vel.bot + vel.top.cross(p)
+    }
+
+    /// Total load the chain puts on its base at the last residual
+    /// evaluation: gravity, inertia, loads and anchor forces of every link,
+    /// as a spatial force `[moment about the chain origin; force]`, N·m and
+    /// N. (The base holds the chain with the opposite force.)
+    pub fn base_load(&self) -> V6 {
+        self.base_load
     }
 
     /// Residual `r = M(q) a − Q(t, q, v)` (see [`SecondOrderSystem`]); also
@@ -487,88 +600,66 @@ impl Chain {
         }
         self.kinematics(t, q, v, a);
         let n = self.joints.len();
-        self.assign_slots();
-        // Loads per link: d'Alembert + gravity at the centre of mass.
-        for s in 0..n {
-            let slot = self.link_slot[s];
-            if slot == u32::MAX {
-                continue;
-            }
-            let fr = &self.frames[s];
-            let ls = &mut self.links[slot as usize];
-            ls.f = V6::ZERO;
-            ls.h = M6::ZERO;
-            ls.inertia = M6::ZERO;
-            if ls.anchored {
-                ls.anchored = false;
-                ls.k_anchor = M6::ZERO;
-                ls.c_anchor = M6::ZERO;
-            }
-            if let Some(lm) = &self.joints[s].link {
-                let c = fr.pos + fr.rot * lm.com;
-                let ic = fr.rot * lm.inertia * fr.rot.transpose();
-                let w = fr.vel.top;
-                let vc = fr.vel.bot + w.cross(c);
-                let alpha = fr.acc.top;
-                let ac = fr.acc.bot + alpha.cross(c) + w.cross(vc);
-                let force = (self.gravity - ac) * lm.mass;
-                let moment = -(ic * alpha + w.cross(ic * w));
-                ls.f = V6::new(c.cross(force) + moment, force);
-                ls.h = M6::point_load_tangent(force, c);
-                ls.inertia = M6::inertia(lm.mass, c, ic);
-            }
-        }
         for ld in &self.loads {
-            let fr = &self.frames[ld.link];
+            let ps = &self.poses[ld.link];
             let ls = &mut self.links[self.link_slot[ld.link] as usize];
-            let p = fr.pos + fr.rot * ld.local_point;
+            let p = ps.pos + ps.rot * ld.local_point;
             ls.f += V6::new(p.cross(ld.force) + ld.moment, ld.force);
-            ls.h += M6::point_load_tangent(ld.force, p);
+            ls.add_point_load_tangent(ld.force, p);
+        }
+        for blocks in self.anchor_blocks.iter_mut() {
+            *blocks = (M6::ZERO, M6::ZERO);
         }
         for an in &self.anchors {
-            let fr = &self.frames[an.link];
+            let ps = &self.poses[an.link];
             let ls = &mut self.links[self.link_slot[an.link] as usize];
-            let p = fr.pos + fr.rot * an.local_point;
-            let pv = fr.vel.bot + fr.vel.top.cross(p);
+            let p = ps.pos + ps.rot * an.local_point;
+            let pv = ps.vel.bot + ps.vel.top.cross(p);
             let (target, target_v) = (an.target)(t);
             let force = -(p - (target - self.origin)) * an.stiffness - (pv - target_v) * an.damping;
             let mut moment = DVec3::ZERO;
             let px = skew(p);
             let k_point = M6 { a: px * px.transpose(), b: px, c: px.transpose(), d: DMat3::IDENTITY };
-            ls.anchored = true;
-            ls.k_anchor += k_point.scale(an.stiffness);
-            ls.c_anchor += k_point.scale(an.damping);
+            let (k_anchor, c_anchor) = &mut self.anchor_blocks[ls.anchor as usize];
+            k_anchor.add_scaled(&k_point, an.stiffness);
+            c_anchor.add_scaled(&k_point, an.damping);
             if let Some((rt, kr, cr)) = an.rotation {
-                let err = rotation_vector(&(fr.rot * rt.transpose()));
-                moment = -err * kr - fr.vel.top * cr;
-                let rot_block = |k: f64| M6 { a: DMat3::from_diagonal(DVec3::splat(k)), b: DMat3::ZERO, c: DMat3::ZERO, d: DMat3::ZERO };
-                ls.k_anchor += rot_block(kr);
-                ls.c_anchor += rot_block(cr);
+                let err = rotation_vector(&(ps.rot * rt.transpose()));
+                moment = -err * kr - ps.vel.top * cr;
+                k_anchor.a += DMat3::from_diagonal(DVec3::splat(kr));
+                c_anchor.a += DMat3::from_diagonal(DVec3::splat(cr));
             }
             ls.f += V6::new(p.cross(force) + moment, force);
-            ls.h += M6::point_load_tangent(force, p);
+            ls.add_point_load_tangent(force, p);
         }
         // Tip-to-base sweep: composite loads, residual, geometric stiffness.
-        self.elastic_forces(q, v);
+        // The load tangent H = [[ha, hb], [0, 0]] is summed tip to base; its
+        // symmetric part ½(H + Hᵀ) = [[hs, ½hb], [½hbᵀ, 0]].
         let mut fc = V6::ZERO;
-        let mut h = M6::ZERO;
-        let mut h_sym = M6::ZERO;
+        let (mut ha, mut hb) = (DMat3::ZERO, DMat3::ZERO);
+        let (mut hs, mut hb2) = (DMat3::ZERO, DMat3::ZERO);
         let mut aba = AbaCarry::default();
         for s in (0..n).rev() {
-            let j = &self.joints[s];
-            let fr = &mut self.frames[s];
             let slot = self.link_slot[s];
-            let ls = (slot != u32::MAX).then(|| &self.links[slot as usize]);
-            if let Some(ls) = ls {
+            if slot != u32::MAX {
+                let ls = &self.links[slot as usize];
                 fc += ls.f;
-                h += ls.h;
-                h_sym = (h + h.transpose()).scale(0.5);
+                ha += ls.ha;
+                hb += ls.hb;
+                hs = (ha + ha.transpose()) * 0.5;
+                hb2 = hb * 0.5;
             }
-            fr.fc = fc;
-            let res = -fr.s.dot(fc) + self.elastic[s] - self.joint_forces[s];
+            let row = &mut self.rows[s];
+            let res = -row.s.dot(fc) + row.elastic - self.joint_forces[s];
             // G_s = ½(H + Hᵀ) + ½(a zᵀ + z aᵀ), a = F̄(f^c) S = S ×* f^c,
             // zᵀS = 1, aᵀS = 0, so G_s S_s = ½(H + Hᵀ) S + ½ S ×* f^c.
-            fr.gs = h_sym.mul_motion(fr.s) + fr.s.cross_force(fc) * 0.5;
+            let sv = row.s;
+            let sym = if sv.top == DVec3::ZERO {
+                V6::new(hb2 * sv.bot, DVec3::ZERO)
+            } else {
+                V6::new(hs * sv.top + hb2 * sv.bot, hb2.transpose() * sv.top)
+            };
+            row.gs = sym + sv.cross_force(fc) * 0.5;
             match solve {
                 None => r[s] = res,
                 Some((c_v, c_q)) => {
@@ -577,6 +668,7 @@ impl Chain {
                 }
             }
         }
+        self.base_load = fc;
         Ok(())
     }
 
@@ -604,19 +696,17 @@ impl Chain {
     /// sub-joint), or a whole block.
     fn eliminate(&mut self, aba: &mut AbaCarry, s: usize, c_v: f64, c_q: f64, b: &[f64]) -> Result<(), SystemError> {
         let slot = self.link_slot[s];
-        let ls = (slot != u32::MAX).then(|| &self.links[slot as usize]);
+        if slot != u32::MAX {
+            let ls = &self.links[slot as usize];
+            aba.add_link(ls, &self.anchor_blocks, c_v, c_q);
+        }
         match self.block[s] {
-            u32::MAX => aba.down(s, &self.joints[s], &mut self.frames[s], ls, c_v, c_q, b[s]),
+            u32::MAX => aba.down(s, &mut self.rows[s], c_v, c_q, b[s]),
+            BLOCK_INNER => Ok(()),
             k => {
-                if let Some(ls) = ls {
-                    aba.add_link(ls, c_v, c_q);
-                }
-                if k == BLOCK_INNER {
-                    return Ok(());
-                }
                 let rs = &self.rotation_springs[k as usize];
                 let (a_mat, pinv) = &mut self.rot_scratch[k as usize];
-                aba.down_block(s, &mut self.frames[s..s + 3], rs, a_mat, pinv, c_v, c_q, [b[s], b[s + 1], b[s + 2]])
+                aba.down_block(s, &mut self.rows[s..s + 3], rs, a_mat, pinv, c_v, c_q, [b[s], b[s + 1], b[s + 2]])
             }
         }
     }
@@ -624,19 +714,19 @@ impl Chain {
     /// Base-to-tip half of the articulated-body solve.
     fn forward_solve(&self, x: &mut [f64]) {
         let mut acc = V6::ZERO;
-        let n = self.frames.len();
+        let n = self.rows.len();
         let mut s = 0;
         while s < n {
             match self.block[s] {
                 u32::MAX | BLOCK_INNER => {
-                    let fr = &self.frames[s];
-                    let xs = (fr.u - fr.u_vec.dot(acc)) * fr.d;
+                    let row = &self.rows[s];
+                    let xs = (row.u - row.u_vec.dot(acc)) * row.d;
                     x[s] = xs;
-                    acc += fr.s * xs;
+                    acc += row.s * xs;
                     s += 1;
                 }
                 k => {
-                    let f = &self.frames[s..s + 3];
+                    let f = &self.rows[s..s + 3];
                     let y = DVec3::new(f[0].u - f[0].u_vec.dot(acc), f[1].u - f[1].u_vec.dot(acc), f[2].u - f[2].u_vec.dot(acc));
                     let xb = self.rot_scratch[k as usize].1 * y;
                     x[s] = xb.x;
@@ -653,13 +743,13 @@ impl Chain {
     pub fn kinetic_energy(&self) -> f64 {
         self.joints
             .iter()
-            .zip(&self.frames)
-            .filter_map(|(j, fr)| {
+            .zip(&self.poses)
+            .filter_map(|(j, ps)| {
                 j.link.map(|lm| {
-                    let c = fr.pos + fr.rot * lm.com;
-                    let w = fr.vel.top;
-                    let vc = fr.vel.bot + w.cross(c);
-                    0.5 * lm.mass * vc.length_squared() + 0.5 * w.dot(fr.rot * (lm.inertia * (fr.rot.transpose() * w)))
+                    let c = ps.pos + ps.rot * lm.com;
+                    let w = ps.vel.top;
+                    let vc = ps.vel.bot + w.cross(c);
+                    0.5 * lm.mass * vc.length_squared() + 0.5 * w.dot(ps.rot * (lm.inertia * (ps.rot.transpose() * w)))
                 })
             })
             .sum()
@@ -670,8 +760,8 @@ impl Chain {
     pub fn gravity_energy(&self) -> f64 {
         self.joints
             .iter()
-            .zip(&self.frames)
-            .filter_map(|(j, fr)| j.link.map(|lm| -lm.mass * self.gravity.dot(fr.pos + fr.rot * lm.com + self.origin)))
+            .zip(&self.poses)
+            .filter_map(|(j, ps)| j.link.map(|lm| -lm.mass * self.gravity.dot(ps.pos + ps.rot * lm.com + self.origin)))
             .sum()
     }
 
@@ -681,66 +771,69 @@ impl Chain {
         let mut e = 0.0;
         for rs in &self.rotation_springs {
             coupled[rs.first..rs.first + 3].iter_mut().for_each(|c| *c = true);
-            let theta = self.rotation_deviation(rs, q).0;
+            let theta = rotation_deviation(rs, &self.joints, q).0;
             e += 0.5 * theta.dot(rs.k * theta);
         }
         e + self.joints.iter().zip(q).zip(&coupled).filter(|(_, c)| !**c).map(|((j, qs), _)| 0.5 * j.stiffness * (qs - j.rest).powi(2)).sum::<f64>()
     }
 
-    /// Deviation rotation vector `θ = log(R₀ᵀ R)` of a rotation spring, and
-    /// `R₀ᵀ E_k` for its three axes.
-    fn rotation_deviation(&self, rs: &RotationSpring, q: &[f64]) -> (DVec3, [DVec3; 3]) {
-        let f = rs.first;
-        let rel = |a: f64, b: f64, c: f64| {
-            let rz = rotate_about(DMat3::IDENTITY, DVec3::Z, a);
-            let rzy = rotate_about(rz, DVec3::Y, b);
-            (rz, rzy, rotate_about(rzy, DVec3::X, c))
-        };
-        let (rz, rzy, r) = rel(q[f], q[f + 1], q[f + 2]);
-        let rests = (self.joints[f].rest, self.joints[f + 1].rest, self.joints[f + 2].rest);
-        if rests == (0.0, 0.0, 0.0) {
-            return (rotation_vector(&r), [DVec3::Z, rz.y_axis, rzy.x_axis]);
+    /// Each sub-joint's spring + damper generalized force at `(q, v)`, N or
+    /// N·m (the rotation springs' law where they apply).
+    #[cfg(test)]
+    pub(crate) fn elastic_forces(&self, q: &[f64], v: &[f64]) -> Vec<f64> {
+        let mut out: Vec<f64> = self.joints.iter().enumerate().map(|(s, j)| j.stiffness * (q[s] - j.rest) + j.damping * v[s]).collect();
+        for rs in &self.rotation_springs {
+            let (forces, _) = rotation_spring_forces(rs, &self.joints, q, v);
+            out[rs.first..rs.first + 3].copy_from_slice(&forces);
         }
-        let (_, _, r0) = rel(rests.0, rests.1, rests.2);
-        let r0t = r0.transpose();
-        let theta = rotation_vector(&(r0t * r));
-        (theta, [r0t * DVec3::Z, r0t * rz.y_axis, r0t * rzy.x_axis])
+        out
     }
+}
 
-    /// Fills `self.elastic` with each sub-joint's spring + damper force.
-    pub(crate) fn elastic_forces(&mut self, q: &[f64], v: &[f64]) {
-        let n = self.joints.len();
-        self.elastic.resize(n, 0.0);
-        for (s, j) in self.joints.iter().enumerate() {
-            self.elastic[s] = j.stiffness * (q[s] - j.rest) + j.damping * v[s];
-        }
-        for k in 0..self.rotation_springs.len() {
-            let rs = self.rotation_springs[k];
-            let (theta, axes) = self.rotation_deviation(&rs, q);
-            let f = rs.first;
-            let omega = axes[0] * v[f] + axes[1] * v[f + 1] + axes[2] * v[f + 2];
-            // J_l⁻¹(θ) x = x − ½ θ×x + β θ×(θ×x), β = (1 − (φ/2)cot(φ/2))/φ²;
-            // J_l⁻ᵀ(θ) = J_l⁻¹(−θ).
-            let phi2 = theta.length_squared();
-            let beta = if phi2 < 1e-6 {
-                1.0 / 12.0 + phi2 / 720.0
-            } else {
-                let phi = phi2.sqrt();
-                (1.0 - 0.5 * phi / (0.5 * phi).tan()) / phi2
-            };
-            let jinv = |x: DVec3, sign: f64| x - 0.5 * sign * theta.cross(x) + beta * theta.cross(theta.cross(x));
-            let theta_dot = jinv(omega, 1.0);
-            let moment = rs.k * theta + rs.k * theta_dot * rs.tau;
-            // Q_k = (Kθ + τKθ̇)ᵀ J⁻¹ E_k = (J⁻ᵀ m)·E_k.
-            let m = jinv(moment, -1.0);
-            for (i, axis) in axes.iter().enumerate() {
-                self.elastic[f + i] = m.dot(*axis);
-            }
-            if k < self.rot_scratch.len() {
-                self.rot_scratch[k].0 = DMat3::from_cols(jinv(axes[0], 1.0), jinv(axes[1], 1.0), jinv(axes[2], 1.0));
-            }
-        }
+/// Deviation rotation vector `θ = log(R₀ᵀ R)` of a rotation spring, and
+/// `R₀ᵀ E_k` for its three axes.
+fn rotation_deviation(rs: &RotationSpring, joints: &[SubJoint], q: &[f64]) -> (DVec3, [DVec3; 3]) {
+    let f = rs.first;
+    let rel = |a: f64, b: f64, c: f64| {
+        let rz = rotate_about(DMat3::IDENTITY, DVec3::Z, a);
+        let rzy = rotate_about(rz, DVec3::Y, b);
+        (rz, rzy, rotate_about(rzy, DVec3::X, c))
+    };
+    let (rz, rzy, r) = rel(q[f], q[f + 1], q[f + 2]);
+    let rests = (joints[f].rest, joints[f + 1].rest, joints[f + 2].rest);
+    if rests == (0.0, 0.0, 0.0) {
+        return (rotation_vector(&r), [DVec3::Z, rz.y_axis, rzy.x_axis]);
     }
+    let (_, _, r0) = rel(rests.0, rests.1, rests.2);
+    let r0t = r0.transpose();
+    let theta = rotation_vector(&(r0t * r));
+    (theta, [r0t * DVec3::Z, r0t * rz.y_axis, r0t * rzy.x_axis])
+}
+
+/// A rotation spring's generalized forces on its three sub-joints and
+/// `A = ∂θ/∂(a, b, c)` (the columns `J_l⁻¹ R₀ᵀ E_k`).
+fn rotation_spring_forces(rs: &RotationSpring, joints: &[SubJoint], q: &[f64], v: &[f64]) -> ([f64; 3], DMat3) {
+    let (theta, axes) = rotation_deviation(rs, joints, q);
+    let f = rs.first;
+    let omega = axes[0] * v[f] + axes[1] * v[f + 1] + axes[2] * v[f + 2];
+    // J_l⁻¹(θ) x = x − ½ θ×x + β θ×(θ×x), β = (1 − (φ/2)cot(φ/2))/φ²;
+    // J_l⁻ᵀ(θ) = J_l⁻¹(−θ).
+    let phi2 = theta.length_squared();
+    let beta = if phi2 < 1e-6 {
+        1.0 / 12.0 + phi2 / 720.0
+    } else {
+        let phi = phi2.sqrt();
+        (1.0 - 0.5 * phi / (0.5 * phi).tan()) / phi2
+    };
+    let jinv = |x: DVec3, sign: f64| x - 0.5 * sign * theta.cross(x) + beta * theta.cross(theta.cross(x));
+    let theta_dot = jinv(omega, 1.0);
+    let moment = rs.k * theta + rs.k * theta_dot * rs.tau;
+    // Q_k = (Kθ + τKθ̇)ᵀ J⁻¹ E_k = (J⁻ᵀ m)·E_k.
+    let m = jinv(moment, -1.0);
+    (
+        [m.dot(axes[0]), m.dot(axes[1]), m.dot(axes[2])],
+        DMat3::from_cols(jinv(axes[0], 1.0), jinv(axes[1], 1.0), jinv(axes[2], 1.0)),
+    )
 }
 
 impl SecondOrderSystem for Chain {
@@ -795,24 +888,20 @@ struct AbaCarry {
 impl AbaCarry {
     /// One sub-joint of the backward sweep (see [`Chain::solve_into`]).
     #[inline]
-    #[allow(clippy::too_many_arguments)]
-    fn down(&mut self, s: usize, j: &SubJoint, fr: &mut Frame, ls: Option<&LinkScratch>, c_v: f64, c_q: f64, b: f64) -> Result<(), SystemError> {
-        if let Some(ls) = ls {
-            self.add_link(ls, c_v, c_q);
-        }
-        let uv = self.inertia.mul_motion(fr.s) - fr.gs * c_q;
-        let armature = c_v * j.damping + c_q * j.stiffness;
-        let d = fr.s.dot(uv) + armature;
+    fn down(&mut self, s: usize, row: &mut Row, c_v: f64, c_q: f64, b: f64) -> Result<(), SystemError> {
+        let uv = self.inertia.mul_motion(row.s) - row.gs * c_q;
+        let armature = c_v * row.damping + c_q * row.stiffness;
+        let d = row.s.dot(uv) + armature;
         // The effective matrix may be indefinite (compression, large c_q);
         // only a vanishing pivot is fatal: |d| ≲ 1e-14 (|S||U| + |armature|).
-        if !d.is_finite() || d * d <= 1e-28 * (fr.s.dot(fr.s) * uv.dot(uv) + armature * armature) {
+        if !d.is_finite() || d * d <= 1e-28 * (row.s.dot(row.s) * uv.dot(uv) + armature * armature) {
             return Err(SystemError::Singular { index: s, pivot: d });
         }
         let inv_d = 1.0 / d;
-        let u = b - fr.s.dot(self.bias);
-        fr.u_vec = uv;
-        fr.d = inv_d;
-        fr.u = u;
+        let u = b - row.s.dot(self.bias);
+        row.u_vec = uv;
+        row.d = inv_d;
+        row.u = u;
         self.inertia.add_outer(uv, uv, -inv_d);
         self.bias += uv * (u * inv_d);
         Ok(())
@@ -820,11 +909,15 @@ impl AbaCarry {
 
     /// Adds a link's inertia (and implicit anchor springs).
     #[inline]
-    fn add_link(&mut self, ls: &LinkScratch, c_v: f64, c_q: f64) {
-        self.inertia += ls.inertia;
-        if ls.anchored {
-            self.inertia.add_scaled(&ls.k_anchor, c_q);
-            self.inertia.add_scaled(&ls.c_anchor, c_v);
+    fn add_link(&mut self, ls: &LinkScratch, anchor_blocks: &[(M6, M6)], c_v: f64, c_q: f64) {
+        self.inertia.a += ls.ia;
+        self.inertia.b += ls.ib;
+        self.inertia.c += ls.ib.transpose();
+        self.inertia.d += DMat3::from_diagonal(DVec3::splat(ls.m));
+        if ls.anchor != u32::MAX {
+            let (k, c) = &anchor_blocks[ls.anchor as usize];
+            self.inertia.add_scaled(k, c_q);
+            self.inertia.add_scaled(c, c_v);
         }
     }
 
@@ -836,7 +929,7 @@ impl AbaCarry {
     fn down_block(
         &mut self,
         s: usize,
-        f: &mut [Frame],
+        f: &mut [Row],
         rs: &RotationSpring,
         a_mat: &DMat3,
         pinv: &mut DMat3,

@@ -303,7 +303,7 @@ pub(crate) fn write_bodies(cables: Query<&CableSim>, mut ctx: WriteRapierContext
                     // The chain pulls its base with the composite load at
                     // the first sub-joint (spatial force about the origin).
                     let ch = &sim.cable.model.chain;
-                    let fc = ch.frames[0].fc;
+                    let fc = ch.base_load();
                     let com = rb.center_of_mass().as_dvec3() - ch.origin;
                     let moment = fc.top - com.cross(fc.bot);
                     rb.apply_impulse((fc.bot * dt).as_vec3(), true);
