@@ -206,18 +206,9 @@ impl Cable {
     }
 
     /// Internal forces of element joint `i` (between element `i − 1` and
-    /// `i`; joint 0 holds the start).
+    /// `i`; joint 0 holds the start), see [`RopeModel::element_forces`].
     pub fn element_forces(&self, i: usize) -> ElementForces {
-        let l = &self.model.layout;
-        if i == 0 && l.free_start {
-            return ElementForces::default();
-        }
-        let f = |k: usize| {
-            let s = l.dof(i, k);
-            let j = &self.model.chain.joints[s];
-            j.stiffness * (self.state.q[s] - j.rest) + j.damping * self.state.v[s]
-        };
-        ElementForces { tension: f(3), shear: [f(4), f(5)], bending: [f(0), f(1)], torsion: f(2) }
+        self.model.element_forces(i, &self.state.q, &self.state.v)
     }
 
     /// Axial tension (N) at arc length `s` (m): the force of the element

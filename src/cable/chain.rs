@@ -777,6 +777,31 @@ impl Chain {
         e + self.joints.iter().zip(q).zip(&coupled).filter(|(_, c)| !**c).map(|((j, qs), _)| 0.5 * j.stiffness * (qs - j.rest).powi(2)).sum::<f64>()
     }
 
+    /// The moment (N·m, world frame) carried by the three revolute
+    /// sub-joints `first`, `first + 1`, `first + 2` at `(q, v)`: the vector
+    /// `W` whose component on each sub-joint's axis is that sub-joint's
+    /// elastic + damping generalized force (the rotation spring's objective
+    /// law where one starts at `first`, else the per-axis springs). In
+    /// equilibrium it is the moment of everything outboard about the joint
+    /// point. The axes are those of the last kinematics pass (current after
+    /// [`Chain::residual_into`] at `q`). Zero if the axes are degenerate.
+    pub fn joint_moment(&self, first: usize, q: &[f64], v: &[f64]) -> DVec3 {
+        let linear = |s: usize| {
+            let j = &self.joints[s];
+            j.stiffness * (q[s] - j.rest) + j.damping * v[s]
+        };
+        let forces = match self.rotation_springs.binary_search_by_key(&first, |r| r.first) {
+            Ok(k) => rotation_spring_forces(&self.rotation_springs[k], &self.joints, q, v).0,
+            Err(_) => [linear(first), linear(first + 1), linear(first + 2)],
+        };
+        let axes = DMat3::from_cols(self.rows[first].s.top, self.rows[first + 1].s.top, self.rows[first + 2].s.top);
+        let det = axes.determinant();
+        if !det.is_finite() || det.abs() < 1e-9 {
+            return DVec3::ZERO;
+        }
+        axes.transpose().inverse() * DVec3::from_array(forces)
+    }
+
     /// Each sub-joint's spring + damper generalized force at `(q, v)`, N or
     /// N·m (the rotation springs' law where they apply).
     #[cfg(test)]

@@ -21,6 +21,7 @@
 //! first joint's stiffnesses likewise.
 
 use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkMass, RotationSpring, SubJoint};
+use super::cable::ElementForces;
 use super::material::RopeSection;
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 use std::sync::Arc;
@@ -556,6 +557,29 @@ fn resample(path: &[DVec3], n: usize) -> Result<Vec<DVec3>, RopeError> {
 }
 
 impl RopeModel {
+    /// Internal forces of element joint `i` (between element `i − 1` and
+    /// `i`; joint 0 holds the start; all zero for a free start) at `(q, v)`:
+    /// what the outboard part of the rope exerts on the inboard part at the
+    /// joint, in element `i`'s frame (x along the element). The axial and
+    /// shear forces are the slide sub-joints' spring + damper forces; the
+    /// moments are the bending–torsion law's moment vector
+    /// ([`Chain::joint_moment`]), objective for any rotation. Reads the
+    /// kinematics of the last residual evaluation (current after a step).
+    pub fn element_forces(&self, i: usize, q: &[f64], v: &[f64]) -> ElementForces {
+        let l = &self.layout;
+        if i == 0 && l.free_start {
+            return ElementForces::default();
+        }
+        let ch = &self.chain;
+        let f = |k: usize| {
+            let s = l.dof(i, k);
+            let j = &ch.joints[s];
+            j.stiffness * (q[s] - j.rest) + j.damping * v[s]
+        };
+        let m = ch.link_rotation(l.element_link(i)).transpose() * ch.joint_moment(l.dof(i, 0), q, v);
+        ElementForces { tension: f(3), shear: [f(4), f(5)], bending: [m.z, m.y], torsion: m.x }
+    }
+
     /// World positions of the `N + 1` nodes (element ends) after the last
     /// residual evaluation of the chain, m.
     pub fn nodes(&self) -> Vec<DVec3> {
