@@ -300,7 +300,7 @@ impl Cable {
     /// gravity, the current loads and the held ends (a moving base counts
     /// with its motion at this instant). Gravity acts from the start; the
     /// loads (point and distributed, as added) are applied in `load_steps`
-    /// equal increments (at least 1), each solved by
+    /// equal increments (at least 1; one solve without loads), each solved by
     /// [`Chain::solve_static`](super::chain::Chain::solve_static) from the
     /// previous one with the convergence tolerance `tol` (m or rad per
     /// coordinate) and at most `max_iterations` iterations. The cable then
@@ -308,7 +308,7 @@ impl Cable {
     /// Returns the iterations used in all. On failure the state and the
     /// loads are left as they were.
     pub fn solve_static(&mut self, load_steps: usize, tol: f64, max_iterations: usize) -> Result<usize, CableError> {
-        let steps = load_steps.max(1);
+        let steps = if self.model.chain.loads.is_empty() { 1 } else { load_steps.max(1) };
         let full = self.model.chain.loads.clone();
         let t = self.state.t;
         let mut q = self.state.q.clone();
