@@ -548,7 +548,18 @@ fn docs_example_parses_with_every_field() {
         (&tag.end, tag.path.len(), tag.contacts),
         (&CableEnd::Free, 3, false)
     );
+    // Extensions: point loads, stress-free shape, static start, spin.
+    assert_eq!(tag.loads.len(), 2);
+    assert_eq!((tag.loads[0].s, tag.loads[0].force, tag.loads[0].moment), (6.0, DVec3::new(0.0, -50.0, 0.0), DVec3::ZERO));
+    assert_eq!((tag.loads[1].s, tag.loads[1].force, tag.loads[1].moment), (3.0, DVec3::new(20.0, 0.0, 0.0), DVec3::new(0.0, 0.0, 1.5)));
+    assert!(!tag.stress_free && hoist.loads.is_empty());
+    assert_eq!((sim.statics, sim.static_load_steps), (true, 5));
+    let radar = s.body("radar").unwrap();
+    let Some(Motion::Spin { axis, rate }) = &radar.motion else { panic!("{:?}", radar.motion) };
+    assert_eq!((*axis, rate.points.len()), (DVec3::Y, 3));
+    approx::assert_relative_eq!(rate.value_at(10.0), 36f64.to_radians());
     let hose = s.cable("hose").unwrap();
+    assert!(hose.stress_free);
     assert_eq!(hose.start, CableEnd::Free);
     assert_eq!(
         hose.end,
@@ -660,6 +671,8 @@ fn defaults_are_right() {
     );
     assert_eq!(sim.integrator.name, "generalized_alpha");
     assert_eq!(sim.integrator.rho_inf, Some(0.0));
+    assert_eq!((sim.statics, sim.static_load_steps), (false, 10));
+    assert!(s.cables[0].loads.is_empty() && !s.cables[0].stress_free);
     let env = &s.environment;
     assert_eq!(
         (
@@ -800,4 +813,138 @@ fn deeply_nested_input_is_an_error_not_a_stack_overflow() {
         e.to_string().len() < 400,
         "the long line is cut around the column:\n{e}"
     );
+}
+
+// ---------------------------------------------------------------------------
+// Extensions: point loads, statics, stress-free shape, spinning bodies
+// ---------------------------------------------------------------------------
+
+/// 1-based line and column of the last occurrence of `needle` in `src`.
+fn last(src: &str, needle: &str) -> (usize, usize) {
+    let at = src.rfind(needle).unwrap_or_else(|| panic!("{needle:?} not in the source"));
+    let line = src[..at].matches('\n').count() + 1;
+    let col = src[..at].rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+/// `BASE` with `extra` appended to the `[[cable]]` table, checked to fail at
+/// the last occurrence of `marker` with `phrase`.
+fn cable_err(extra: &str, marker: &str, phrase: &str) -> ScenarioError {
+    let src = format!("{BASE}{extra}\n");
+    let (line, col) = last(&src, marker);
+    check(&src, line, col, phrase)
+}
+
+#[test]
+fn point_loads_are_validated() {
+    cable_err("loads = [{ s = nan, force = [0, 1, 0] }]", "nan", "cable `rope`: load 1: `s` must be a finite number, found NaN");
+    cable_err("loads = [{ s = -1, force = [0, 1, 0] }]", "-1", "load 1: `s` must be at least 0 m, found -1");
+    cable_err(
+        "loads = [{ s = 5, force = [0, 1, 0] }, { s = 6, force = [0, 1, 0] }]",
+        "6,",
+        "load 2: `s` must be at most the cable's `length` 5 m, found 6",
+    );
+    cable_err("loads = [{ s = 2, force = [0, 1] }]", "[0, 1]", "load 1: `force` must have 3 components [x, y, z] (N), found 2");
+    cable_err("loads = [{ s = 2, force = [0, inf, 0] }]", "inf", "load 1: `force` must be a finite number");
+    cable_err("loads = [{ s = 2, force = [0, 1, 0], moment = [nan, 0, 0] }]", "nan", "load 1: `moment` must be a finite number");
+    cable_err("loads = [{ s = 2, force = \"up\" }]", "\"up\"", "invalid type: string \"up\"");
+    cable_err("loads = [{ s = \"end\", force = [0, 1, 0] }]", "\"end\"", "invalid type: string \"end\"");
+    cable_err("loads = [{ s = 2, force = [0, 1, 0], torque = [0, 0, 1] }]", "torque", "unknown field `torque`");
+    cable_err("loads = [{ s = 2 }]", "{ s = 2 }", "missing field `force`");
+    cable_err("loads = { s = 2, force = [0, 1, 0] }", "{ s = 2", "invalid type");
+}
+
+#[test]
+fn point_loads_parse() {
+    let src = format!("{BASE}loads = [{{ s = 5, force = [0, -100, 0] }}, {{ s = 2.5, force = [1, 0, 0], moment = [0, 0, 3] }}]\n");
+    let s = parse(&src, "loads.toml").unwrap_or_else(|e| panic!("{e}"));
+    let l = &s.cables[0].loads;
+    assert_eq!(l.len(), 2);
+    assert_eq!((l[0].s, l[0].force, l[0].moment), (5.0, DVec3::new(0.0, -100.0, 0.0), DVec3::ZERO));
+    assert_eq!((l[1].s, l[1].force, l[1].moment), (2.5, DVec3::X, DVec3::new(0.0, 0.0, 3.0)));
+    let base = parse(BASE, "base.toml").unwrap();
+    assert!(base.cables[0].loads.is_empty() && !base.cables[0].stress_free);
+}
+
+#[test]
+fn stress_free_is_a_boolean() {
+    cable_err("stress_free = 1", "1", "invalid type: integer `1`, expected a boolean");
+    let s = parse(&format!("{BASE}stress_free = true\n"), "sf.toml").unwrap();
+    assert!(s.cables[0].stress_free);
+}
+
+#[test]
+fn statics_fields_are_validated() {
+    let with = |sim: &str| replace("dt = 0.01\n", &format!("dt = 0.01\n{sim}\n"));
+    check(&with("statics = \"yes\""), 4, 11, "invalid type: string \"yes\", expected a boolean");
+    check(&with("statics = true\nstatic_load_steps = 0"), 5, 21, "`static_load_steps` must be between 1 and 10000, found 0");
+    check(&with("statics = true\nstatic_load_steps = -3"), 5, 21, "found -3");
+    check(&with("statics = true\nstatic_load_steps = 2.5"), 5, 21, "invalid type: floating point");
+    check(&with("static_load_steps = 5"), 4, 21, "`static_load_steps` only applies with `statics = true`");
+    check(&with("statics = false\nstatic_load_steps = 5"), 5, 21, "only applies with `statics = true`");
+    let s = parse(&with("statics = true"), "s.toml").unwrap();
+    assert_eq!((s.simulation.statics, s.simulation.static_load_steps), (true, 10));
+    let s = parse(&with("statics = true\nstatic_load_steps = 4"), "s.toml").unwrap();
+    assert_eq!((s.simulation.statics, s.simulation.static_load_steps), (true, 4));
+    let s = parse(BASE, "base.toml").unwrap();
+    assert!(!s.simulation.statics);
+}
+
+/// `BASE` plus a kinematic body `hub` with the given `motion`.
+fn hub(motion: &str) -> String {
+    format!("{BASE}\n[[body]]\nname = \"hub\"\ntype = \"kinematic\"\nshape = \"ball\"\nradius = 0.1\nposition = [1, 2, 3]\nmotion = {motion}\n")
+}
+
+fn hub_err(motion: &str, marker: &str, phrase: &str) -> ScenarioError {
+    let src = hub(motion);
+    let (line, col) = last(&src, marker);
+    check(&src, line, col, phrase)
+}
+
+#[test]
+fn spin_motion_is_validated() {
+    hub_err("{ type = \"spin\", axis = [0, 0, 0], rate = [[0, 10]] }", "[0, 0, 0]", "body `hub`: motion: `axis` must be a nonzero direction, found [0, 0, 0]");
+    hub_err("{ type = \"spin\", axis = [0, nan, 1], rate = [[0, 10]] }", "nan", "motion: `axis` must be a finite number");
+    hub_err("{ type = \"spin\", axis = [0, 1], rate = [[0, 10]] }", "[0, 1]", "`axis` must have 3 components");
+    hub_err("{ type = \"spin\", axis = [0, 1, 0] }", "{ type", "motion: missing field `rate` (required for a spin)");
+    hub_err("{ type = \"spin\", rate = [[0, 10]] }", "{ type", "motion: missing field `axis` (required for a spin)");
+    hub_err(
+        "{ type = \"spin\", axis = [0, 1, 0], rate = [[0, 0], [2, 10], [1, 20]] }",
+        "1, 20",
+        "times in `rate` must be strictly increasing; point 3 has t = 1 after t = 2",
+    );
+    hub_err("{ type = \"spin\", axis = [0, 1, 0], rate = [[0, 0], [1, nan]] }", "nan", "`rate`: the rate must be a finite number, found NaN");
+    hub_err("{ type = \"spin\", axis = [0, 1, 0], rate = [[0, \"fast\"]] }", "\"fast\"", "`rate`: the rate must be a number, found a string");
+    hub_err("{ type = \"spin\", axis = [0, 1, 0], rate = 30 }", "30", "`rate` must be a list of points [[t, rate], ...] (s, deg/s); found a number");
+    hub_err("{ type = \"spin\", axis = [0, 1, 0], rate = [] }", "[]", "found an empty list");
+    hub_err("{ type = \"spin\", axis = [0, 1, 0], rate = [[0, 1]], period = 2 }", "2 }", "`period` does not apply to a `spin` motion");
+    hub_err("{ type = \"sine\", amplitude = [1, 0, 0], period = 2, axis = [0, 1, 0] }", "[0, 1, 0]", "`axis` does not apply to a `sine` motion");
+    hub_err("{ type = \"table\", points = [[0, [1, 2, 3]]], rate = [[0, 1]] }", "[[0, 1]]", "`rate` does not apply to a `table` motion");
+    hub_err("{ type = \"spinning\", axis = [0, 1, 0], rate = [[0, 1]] }", "\"spinning\"", "unknown motion type `spinning`; expected one of `sine`, `table`, `spin`");
+}
+
+#[test]
+fn spin_motion_parses_in_radians_with_a_unit_axis() {
+    let s = parse(&hub("{ type = \"spin\", axis = [0, 2, 0], rate = [[0, 0], [2, 90], [4, 90]] }"), "spin.toml").unwrap_or_else(|e| panic!("{e}"));
+    let b = s.body("hub").unwrap();
+    let Some(Motion::Spin { axis, rate }) = &b.motion else { panic!("{:?}", b.motion) };
+    assert_eq!(*axis, DVec3::Y);
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    assert_eq!(rate.points, vec![(0.0, 0.0), (2.0, half_pi), (4.0, half_pi)]);
+    let m = b.motion.as_ref().unwrap();
+    // Angle: ∫ rate = π/2 (ramp) + π (constant) at t = 4, then π/2 per s.
+    for (t, angle) in [(0.0, 0.0), (1.0, half_pi / 4.0), (2.0, half_pi), (4.0, 1.5 * std::f64::consts::PI), (5.0, 2.0 * std::f64::consts::PI)] {
+        let q = m.rotation_at(t);
+        let expect = DQuat::from_rotation_y(angle);
+        assert!(q.dot(expect).abs() > 1.0 - 1e-14, "t = {t}: {q:?} vs {expect:?}");
+    }
+    assert_eq!(m.angular_velocity_at(1.0), DVec3::new(0.0, half_pi / 2.0, 0.0));
+    assert_eq!(m.angular_acceleration_at(1.0), DVec3::new(0.0, half_pi / 2.0, 0.0));
+    // At a breakpoint: the mean of the slopes on either side; outside: 0.
+    assert_eq!(m.angular_acceleration_at(2.0), DVec3::new(0.0, half_pi / 4.0, 0.0));
+    assert_eq!(m.angular_acceleration_at(5.0), DVec3::ZERO);
+    // Position stays; orientation = spin · rotation.
+    assert_eq!(b.position_at(3.0), DVec3::new(1.0, 2.0, 3.0));
+    assert!(b.rotation_at(2.0).dot(DQuat::from_rotation_y(half_pi)).abs() > 1.0 - 1e-14);
+    let _ = EulerRot::XYZ;
 }

@@ -200,3 +200,311 @@ fn taut_string_scenario_first_frequency() {
     assert!((err - 2.6e-4).abs() < 5e-5, "{err}");
     assert!((t_mean - 1000.0).abs() < 1.0);
 }
+
+/// Builds the scenario in `file` (a `statics = true` file is at its static
+/// equilibrium then), samples the probes at t = 0, runs the whole duration
+/// and samples again: (row at t = 0, row at the end).
+fn static_then_run(file: &str) -> (Vec<f64>, Vec<f64>) {
+    let sc = scenario::load(Path::new(file)).unwrap_or_else(|e| panic!("{e}"));
+    assert!(sc.simulation.statics, "{file}: not a statics scenario");
+    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
+    let (mut first, mut last) = (Vec::new(), Vec::new());
+    world.sample(&mut first);
+    let frames = (world.scenario.simulation.duration / world.scenario.simulation.dt).round() as u64;
+    for _ in 0..frames {
+        world.step().unwrap_or_else(|e| panic!("{e}"));
+    }
+    world.sample(&mut last);
+    (first, last)
+}
+
+/// The run starts at rest at the static equilibrium and stays there:
+/// every probe moves by less than `tol` (relative to its size, or absolute
+/// below 1).
+fn assert_stays(first: &[f64], last: &[f64], tol: f64) {
+    for (k, (a, b)) in first.iter().zip(last).enumerate() {
+        assert!((a - b).abs() <= tol * a.abs().max(1.0), "column {k}: {a} at t = 0, {b} at the end");
+    }
+}
+
+/// verification-cases §1a from a scenario file (`statics = true`, point
+/// `loads`): Mattiasson's cantilever at α = 1, 5, 10 with N = 40; the same
+/// tolerances as `statics::cantilever_tip_load_mattiasson` at N = 40.
+#[test]
+fn cantilever_tip_load_scenario_mattiasson() {
+    let (row, end) = static_then_run("assets/scenarios/cantilever_tip_load.toml");
+    let table = [(1.0, 0.05643, 0.30172, 0.46135), (5.0, 0.38763, 0.71379, 1.21537), (10.0, 0.55500, 0.81061, 1.43029)];
+    for (k, &(alpha, u_ref, w_ref, th_ref)) in table.iter().enumerate() {
+        // Columns: tip (3), node one element before the tip (3), per cable.
+        let c = 6 * k;
+        let z0 = k as f64;
+        let (tip, prev) = (&row[c..c + 3], &row[c + 3..c + 6]);
+        let (u, w) = (1.0 - tip[0], -tip[1]);
+        // Tip rotation from the last element's chord (rigid element).
+        let th = (prev[1] - tip[1]).atan2(tip[0] - prev[0]);
+        let (eu, ew, et) = ((u - u_ref) / u_ref, (w - w_ref) / w_ref, (th - th_ref) / th_ref);
+        println!("α={alpha}: u/L {u:.5} ({eu:+.2e}), w/L {w:.5} ({ew:+.2e}), θ {th:.5} ({et:+.2e}), z − z0 {:.1e}", tip[2] - z0);
+        assert!(ew.abs() < 6e-4 && eu.abs() < 1.8e-3 && et.abs() < 6e-4, "α={alpha}");
+        assert!((tip[2] - z0).abs() < 1e-9);
+    }
+    assert_stays(&row, &end, 1e-9);
+}
+
+/// verification-cases §1b from a scenario file (`statics = true`, a point
+/// `moment`): the tip at φ = π/2, π, 2π with N = 20 within 1e-3·L, as
+/// `statics::cantilever_end_moment_rolls_into_circle`.
+#[test]
+fn cantilever_end_moment_scenario_rolls_into_circle() {
+    let (row, end) = static_then_run("assets/scenarios/cantilever_end_moment.toml");
+    let pi = std::f64::consts::PI;
+    for (k, phi) in [0.5 * pi, pi, 2.0 * pi].into_iter().enumerate() {
+        let clamp = glam::DVec3::new(0.0, -2.0 * k as f64, 0.0);
+        let tip = glam::DVec3::from_slice(&row[3 * k..3 * k + 3]) - clamp;
+        let exact = glam::DVec3::new(phi.sin() / phi, 0.0, (1.0 - phi.cos()) / phi);
+        let err = tip.distance(exact);
+        println!("φ = {phi:.4}: tip {tip:.6} exact {exact:.6} |err| {err:.2e} L");
+        assert!(err < 1e-3, "φ = {phi}: tip error {err}");
+    }
+    assert_stays(&row, &end, 1e-9);
+}
+
+/// verification-cases §2b from a scenario file (`statics = true`): the
+/// elastic catenary's H, T_end and sag within 1e-3, as
+/// `statics::elastic_catenary_level_supports`.
+#[test]
+fn catenary_scenario_elastic_irvine() {
+    let (row, end) = static_then_run("assets/scenarios/catenary.toml");
+    let rows = [
+        ("L0 = 102, EA = 1e9", 1447.630, 1534.839, 8.72098),
+        ("L0 = 102, EA = 1e6", 1396.061, 1486.300, 9.03686),
+        ("L0 = 99.9, EA = 1e7", 12619.389, 12629.270, 0.98942),
+    ];
+    for (k, (what, h_ref, t_ref, sag_ref)) in rows.into_iter().enumerate() {
+        let (t_end, h, sag) = (row[3 * k], row[3 * k + 1], -row[3 * k + 2]);
+        let (eh, et, es) = ((h - h_ref) / h_ref, (t_end - t_ref) / t_ref, (sag - sag_ref) / sag_ref);
+        println!("{what}: H {h:.3} ({eh:+.2e}), T_end {t_end:.3} ({et:+.2e}), sag {sag:.5} ({es:+.2e})");
+        assert!(eh.abs() < 1e-3 && et.abs() < 1e-3 && es.abs() < 1e-3, "{what}");
+    }
+    assert_stays(&row, &end, 1e-6);
+}
+
+/// verification-cases §1c from a scenario file (`statics = true`,
+/// `stress_free = true`, a point load): the 45° bend's tip displacement at
+/// P = 300 and 600 with N = 32 within 0.5 % of |Δ| (the §1c bar, as
+/// `verify_beams::bend45_meets_section_1c_tolerance_with_16_elements`).
+#[test]
+fn bend_45_scenario_out_of_plane_tip_load() {
+    let (row, end) = static_then_run("assets/scenarios/bend_45.toml");
+    let r = 100.0;
+    let c45 = std::f64::consts::FRAC_PI_4;
+    let initial = glam::DVec3::new(r - r * c45.cos(), 0.0, r * c45.sin());
+    let cases = [(300.0, 0.0, glam::DVec3::new(-7.045, 40.192, -11.932)), (600.0, 100.0, glam::DVec3::new(-13.605, 53.475, -23.561))];
+    for (k, (p, x0, reference)) in cases.into_iter().enumerate() {
+        let tip = glam::DVec3::from_slice(&row[3 * k..3 * k + 3]);
+        let d = tip - initial - glam::DVec3::new(x0, 0.0, 0.0);
+        let err = d.distance(reference) / reference.length();
+        println!("P={p}: Δ = ({:.3}, {:.3}, {:.3}) vs ({:.3}, {:.3}, {:.3}): |error| {:.3} % of |Δ|", d.x, d.y, d.z, reference.x, reference.y, reference.z, 100.0 * err);
+        assert!(err < 5e-3, "P={p}: {err}");
+    }
+    assert_stays(&row, &end, 1e-9);
+}
+
+/// verification-cases §9a from a scenario file (a kinematic hub with a
+/// `spin` motion, the beam clamped to it): v_tip, the tip deflection
+/// transverse to the rotating chord, peaks within 1 % of −0.57375 m and
+/// 0.05 s of 6.76 s; the table instants within 1 % of the peak; the
+/// residual vibration after spin-up within 20 % of 0.0037 m (N = 20, as
+/// `verify_spinup::spin_up_beam_tip_deflection`).
+#[test]
+fn spin_up_scenario_tip_deflection() {
+    let sc = scenario::load(Path::new("assets/scenarios/spin_up.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let hub = sc.body("hub").unwrap().clone();
+    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
+    let h = world.scenario.simulation.dt;
+    let frames = (world.scenario.simulation.duration / h).round() as u64;
+    let (mut ts, mut vs, mut row) = (vec![0.0], vec![0.0], Vec::new());
+    let mut worst_rate: f64 = 0.0;
+    for _ in 0..frames {
+        world.step().unwrap_or_else(|e| panic!("{e}"));
+        world.sample(&mut row);
+        // Tip in the hub frame; the direction of motion of +x under a
+        // rotation about +y is −z.
+        let tip = hub.rotation_at(world.time).inverse() * glam::DVec3::from_slice(&row[0..3]);
+        ts.push(world.time);
+        vs.push(-tip.z);
+        // The hub's rate probe (deg/s) against the §9a closed form.
+        let (t, w_s, t_s) = (world.time, 6.0, 15.0);
+        let rate = if t <= t_s { w_s / t_s * (t - t_s / std::f64::consts::TAU * (std::f64::consts::TAU * t / t_s).sin()) } else { w_s };
+        worst_rate = worst_rate.max((row[3].to_radians() - rate).abs());
+    }
+    let k = (1..vs.len() - 1).min_by(|&a, &b| vs[a].total_cmp(&vs[b])).unwrap();
+    let (y0, y1, y2) = (vs[k - 1], vs[k], vs[k + 1]);
+    let off = 0.5 * (y0 - y2) / (y0 - 2.0 * y1 + y2);
+    let (t_peak, peak) = (ts[k] + off * h, y1 - 0.25 * (y0 - y2) * off);
+    let (peak_ref, t_peak_ref) = (-0.57375, 6.76);
+    let (ep, et) = (peak / peak_ref - 1.0, t_peak - t_peak_ref);
+    println!("peak v_tip {peak:.5} m at {t_peak:.3} s (ref {peak_ref} at {t_peak_ref}): {:+.3} %, {et:+.3} s; hub rate vs closed form within {worst_rate:.1e} rad/s", 100.0 * ep);
+    let table = [(1.0, -0.02054), (2.0, -0.10237), (3.0, -0.21725), (4.0, -0.34225), (5.0, -0.46844), (6.0, -0.54354), (7.0, -0.57122), (8.0, -0.54273), (10.0, -0.36267), (12.0, -0.15084), (14.0, -0.02028)];
+    let mut worst: f64 = 0.0;
+    for (t, v_ref) in table {
+        let i = ts.iter().position(|&x| (x - t).abs() < 0.5 * h).unwrap();
+        println!("  t = {t}: {:.5} ({:+.5})", vs[i], vs[i] - v_ref);
+        worst = worst.max((vs[i] - v_ref).abs());
+    }
+    let after: Vec<f64> = ts.iter().zip(&vs).filter(|(t, _)| **t > 16.0).map(|(_, v)| *v).collect();
+    let mean = after.iter().sum::<f64>() / after.len() as f64;
+    let amp = after.iter().map(|v| (v - mean).abs()).fold(0.0, f64::max);
+    println!("  worst table deviation {worst:.5} m; residual vibration ±{amp:.4} m (≈ 0.0037 m)");
+    assert!(ep.abs() < 0.01, "peak error {ep}");
+    assert!(et.abs() < 0.05, "peak time error {et}");
+    assert!(worst < 0.01 * peak_ref.abs(), "table deviation {worst}");
+    assert!((amp / 0.0037 - 1.0).abs() < 0.2, "residual vibration {amp}");
+}
+
+/// `statics = true` that cannot converge (a tip load α = P L²/EI = 1e5 in
+/// one load step) is refused before the run, naming the file, the cable's
+/// line and the cable.
+#[test]
+fn static_start_failure_names_the_cable() {
+    let src = r#"[simulation]
+duration = 0.1
+dt = 0.01
+gravity = [0, 0, 0]
+statics = true
+static_load_steps = 1
+
+[[cable]]
+name = "beam"
+length = 1.0
+segments = 20
+diameter = 0.01
+linear_density = 0.001
+ea = 1e7
+ei = 1.0
+gj = 1.0
+start = { world = [0.0, 0.0, 0.0], clamp = true }
+path = [[0, 0, 0], [1, 0, 0]]
+loads = [{ s = 1.0, force = [0.0, -1e5, 0.0] }]
+"#;
+    let sc = scenario::parse(src, "overload.toml").unwrap_or_else(|e| panic!("{e}"));
+    let err = World::new(sc).unwrap_err();
+    let shown = err.to_string();
+    println!("{shown}");
+    assert!(matches!(err, bevy_rapier_cable::sim::SimError::Static { .. }), "{shown}");
+    assert!(shown.starts_with("overload.toml:8:1: cable `beam`: static equilibrium not found at load step 1 of 1"), "{shown}");
+}
+
+/// A cable `end` clamped to a spinning body is refused (the end spring's
+/// orientation hold has a fixed target); a pinned one is accepted.
+#[test]
+fn clamped_end_on_a_spinning_body_is_refused() {
+    let src = |clamp: bool| {
+        format!(
+            r#"[simulation]
+duration = 0.1
+dt = 0.01
+
+[[body]]
+name = "hub"
+type = "kinematic"
+shape = "ball"
+radius = 0.1
+position = [0, -2, 0]
+motion = {{ type = "spin", axis = [0, 1, 0], rate = [[0, 0], [1, 90]] }}
+
+[[cable]]
+name = "rope"
+length = 2.0
+segments = 4
+diameter = 0.01
+linear_density = 0.5
+ea = 1e6
+ei = 1
+gj = 1
+start = {{ world = [0, 0, 0] }}
+end = {{ body = "hub", clamp = {clamp} }}
+"#
+        )
+    };
+    let sc = scenario::parse(&src(true), "spin_end.toml").unwrap_or_else(|e| panic!("{e}"));
+    let err = World::new(sc).unwrap_err().to_string();
+    println!("{err}");
+    assert!(err.contains("spin_end.toml:13:1") && err.contains("clamped to spinning body `hub`"), "{err}");
+    let sc = scenario::parse(&src(false), "spin_end.toml").unwrap_or_else(|e| panic!("{e}"));
+    World::new(sc).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// A cable clamped to a spinning body off its axis: the runner's base
+/// motion (the anchor point's ω × r and α × r + ω × (ω × r), the body's ω
+/// and α) gives the same motion as a hand-written `BaseMotion::Prescribed`
+/// of the same spin: rate 90t deg/s for t ≤ 1 s, then 90 deg/s, about +y;
+/// the anchor 1 m off the axis, the beam along +x.
+#[test]
+fn spin_motion_drives_an_off_axis_clamp_like_the_prescribed_base() {
+    use bevy_rapier_cable::cable::*;
+    use bevy_rapier_cable::integrate::Scheme;
+    use glam::{DMat3, DVec3};
+    let src = r#"[simulation]
+duration = 3.0
+dt = 0.01
+gravity = [0, 0, 0]
+
+[[body]]
+name = "hub"
+type = "kinematic"
+shape = "ball"
+radius = 0.1
+position = [0, 0, 0]
+motion = { type = "spin", axis = [0, 1, 0], rate = [[0, 0], [1, 90]] }
+
+[[cable]]
+name = "beam"
+length = 1.0
+segments = 5
+diameter = 0.02
+linear_density = 1.0
+ea = 1e6
+ei = 1.0
+gj = 1.0
+start = { body = "hub", anchor = [0, 0, 1], clamp = true }
+path = [[0, 0, 1], [1, 0, 1]]
+"#;
+    let sc = scenario::parse(src, "spin_clamp.toml").unwrap_or_else(|e| panic!("{e}"));
+    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
+    let w0 = std::f64::consts::FRAC_PI_2;
+    let base = BaseMotion::Prescribed(std::sync::Arc::new(move |t: f64| {
+        let (th, w, al) = if t < 1.0 - 1e-9 {
+            (0.5 * w0 * t * t, w0 * t, w0)
+        } else if t <= 1.0 + 1e-9 {
+            (0.5 * w0, w0, 0.5 * w0)
+        } else {
+            (0.5 * w0 + w0 * (t - 1.0), w0, 0.0)
+        };
+        let rot = DMat3::from_rotation_y(th);
+        let r = rot * DVec3::Z;
+        let (wv, av) = (DVec3::Y * w, DVec3::Y * al);
+        BaseState { rotation: rot, position: r, angular_velocity: wv, velocity: wv.cross(r), angular_acceleration: av, acceleration: av.cross(r) + wv.cross(wv.cross(r)) }
+    }));
+    let sec = RopeSection { linear_density: 1.0, ea: 1e6, ei: 1.0, ei2: 1.0, gj: 1.0, min_breaking_load: 0.0 };
+    let model = RopeBuilder::new(1.0, 5, sec, 0.02)
+        .path(vec![DVec3::Z, DVec3::new(1.0, 0.0, 1.0)])
+        .start(RopeStart::Clamped(base))
+        .gravity(DVec3::ZERO)
+        .build()
+        .unwrap();
+    let mut api = Cable::new(model, Scheme::default()).unwrap();
+    let mut worst: f64 = 0.0;
+    let mut bent: f64 = 0.0;
+    for _ in 0..300 {
+        world.step().unwrap_or_else(|e| panic!("{e}"));
+        api.step(0.01).unwrap();
+        let (a, b) = (world.cable("beam").unwrap().nodes(), api.nodes());
+        worst = a.iter().zip(&b).map(|(p, q)| p.distance(*q)).fold(worst, f64::max);
+        // Deflection of the tip from the rigidly turning straight beam.
+        let th = world.scenario.body("hub").unwrap().rotation_at(world.time);
+        bent = bent.max(a[5].distance(th * DVec3::new(1.0, 0.0, 1.0)));
+    }
+    println!("largest node difference scenario vs prescribed base {worst:.2e} m; largest tip deflection {bent:.3} m");
+    assert!(bent > 0.05, "the test does not load the beam: {bent}");
+    assert!(worst < 1e-9, "{worst}");
+}

@@ -78,7 +78,7 @@ fn load(file: &Path) -> Result<(scenario::Scenario, World), ExitCode> {
     })?;
     let world = World::new(sc.clone()).map_err(|e| {
         eprintln!("error: {e}");
-        ExitCode::from(if matches!(e, SimError::Diverged { .. }) { 3 } else { 2 })
+        ExitCode::from(if matches!(e, SimError::Diverged { .. } | SimError::Static { .. }) { 3 } else { 2 })
     })?;
     Ok((sc, world))
 }

@@ -1,7 +1,7 @@
 //! [`Cable`]: a rope model with its integrator state, stepped in time, with
 //! the queries users read (node positions, tension, moments, energy).
 
-use super::chain::LinkLoad;
+use super::chain::{LinkLoad, StaticError};
 use super::rope::{RopeModel, ELEMENT_DOFS};
 use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
 use glam::{DMat3, DVec3};
@@ -13,6 +13,16 @@ pub enum CableError {
     /// The integrator failed (Newton, solve, explicit step limit).
     #[error(transparent)]
     Integrate(#[from] IntegrateError),
+    /// No static equilibrium was found ([`Cable::solve_static`]).
+    #[error("static equilibrium not found at load step {step} of {steps}: {source}")]
+    Static {
+        /// Load step that failed (1-based).
+        step: usize,
+        /// Number of load steps.
+        steps: usize,
+        /// What the static solver reported.
+        source: StaticError,
+    },
     /// The state left physical sense (non-finite, or an element stretched
     /// or compressed by more than its length).
     #[error("cable diverged at t = {time} s: {reason}")]
@@ -261,10 +271,68 @@ impl Cable {
     /// moment-arm change is in the implicit tangent) and stay until
     /// [`Cable::clear_loads`].
     pub fn add_point_load(&mut self, s: f64, force: DVec3) {
+        self.add_point_load_and_moment(s, force, DVec3::ZERO);
+    }
+
+    /// Adds a point force (N) and a moment (N·m), both world frame and of
+    /// fixed direction, at arc length `s` (m, along the unstretched rope,
+    /// clamped to `[0, length]`). Like [`Cable::add_point_load`], they stay
+    /// until [`Cable::clear_loads`].
+    pub fn add_point_load_and_moment(&mut self, s: f64, force: DVec3, moment: DVec3) {
         let l = &self.model.layout;
         let (i, f) = self.locate(s);
         let link = l.element_link(i);
-        self.model.chain.loads.push(LinkLoad { link, force, local_point: DVec3::new(f * l.element_length, 0.0, 0.0), moment: DVec3::ZERO });
+        self.model.chain.loads.push(LinkLoad { link, force, local_point: DVec3::new(f * l.element_length, 0.0, 0.0), moment });
+    }
+
+    /// Replaces the state by the static equilibrium at the current time:
+    /// gravity, the current loads and the held ends (a moving base counts
+    /// with its motion at this instant). Gravity acts from the start; the
+    /// loads (point and distributed, as added) are applied in `load_steps`
+    /// equal increments (at least 1; one solve without loads), each solved by
+    /// [`Chain::solve_static`](super::chain::Chain::solve_static) from the
+    /// previous one with the convergence tolerance `tol` (m or rad per
+    /// coordinate) and at most `max_iterations` iterations. The cable then
+    /// starts at rest (v = 0) there, with the consistent acceleration.
+    /// Returns the iterations used in all. On failure the state and the
+    /// loads are left as they were.
+    pub fn solve_static(&mut self, load_steps: usize, tol: f64, max_iterations: usize) -> Result<usize, CableError> {
+        let steps = if self.model.chain.loads.is_empty() { 1 } else { load_steps.max(1) };
+        let full = self.model.chain.loads.clone();
+        let t = self.state.t;
+        let mut q = self.state.q.clone();
+        let mut iterations = 0;
+        for step in 1..=steps {
+            let f = step as f64 / steps as f64;
+            for (ld, full) in self.model.chain.loads.iter_mut().zip(&full) {
+                ld.force = full.force * f;
+                ld.moment = full.moment * f;
+            }
+            match self.model.chain.solve_static(t, &mut q, tol, max_iterations) {
+                Ok(it) => iterations += it,
+                Err(source) => {
+                    self.model.chain.loads = full;
+                    self.refresh();
+                    return Err(CableError::Static { step, steps, source });
+                }
+            }
+        }
+        self.model.chain.loads = full;
+        let old = std::mem::replace(&mut self.state.q, q);
+        let old_v = std::mem::replace(&mut self.state.v, vec![0.0; old.len()]);
+        let checked = match self.state.recompute_acceleration(&mut self.model.chain) {
+            Ok(()) => self.check_sanity(),
+            Err(e) => Err(e.into()),
+        };
+        if let Err(e) = checked {
+            self.state.q = old;
+            self.state.v = old_v;
+            let _ = self.state.recompute_acceleration(&mut self.model.chain);
+            self.refresh();
+            return Err(e);
+        }
+        self.refresh();
+        Ok(iterations)
     }
 
     /// Adds a distributed load: `load(element, midpoint, midpoint velocity)`

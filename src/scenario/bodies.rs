@@ -218,7 +218,13 @@ fn motion(ctx: &Ctx<'_>, raw: &S<RawMotion>, o: &str) -> Res<Motion> {
     let r = raw.get_ref();
     let at = raw.span();
     let o = &format!("{o}: motion");
-    match ctx.choice(&r.kind, o, "motion type", &["sine", "table"])? {
+    let kind = ctx.choice(&r.kind, o, "motion type", &["sine", "table", "spin"])?;
+    if kind != "spin" {
+        let why = format!("does not apply to a `{kind}` motion");
+        ctx.forbid(&r.axis, o, "axis", &why)?;
+        ctx.forbid(&r.rate, o, "rate", &why)?;
+    }
+    match kind {
         "sine" => {
             let why = "does not apply to a `sine` motion";
             ctx.forbid(&r.points, o, "points", why)?;
@@ -235,6 +241,26 @@ fn motion(ctx: &Ctx<'_>, raw: &S<RawMotion>, o: &str) -> Res<Motion> {
                 period: ctx.check(p, o, "period", Rule::Positive, "s")?,
                 phase: ctx.opt(&r.phase, o, "phase")?.unwrap_or(0.0).to_radians(),
             })
+        }
+        "spin" => {
+            let why = "does not apply to a `spin` motion";
+            ctx.forbid(&r.amplitude, o, "amplitude", why)?;
+            ctx.forbid(&r.period, o, "period", why)?;
+            ctx.forbid(&r.phase, o, "phase", why)?;
+            ctx.forbid(&r.points, o, "points", why)?;
+            let a = ctx.need(&r.axis, at.clone(), o, "axis", " (required for a spin)")?;
+            let axis = ctx.vec3(a, o, "axis", "world frame")?;
+            let Some(axis) = axis.try_normalize().filter(|_| axis.length() >= 1e-9) else {
+                return Err(ctx.err(
+                    a.span(),
+                    format!("{o}: `axis` must be a nonzero direction, found {}", fmt_vec(axis)),
+                ));
+            };
+            let rate = ctx.need(&r.rate, at, o, "rate", " (required for a spin)")?;
+            let points = ctx.table(rate, o, "rate", "[[t, rate], ...] (s, deg/s)", |d| {
+                Ok(ctx.datum_num(d, o, "rate", "rate")?.to_radians())
+            })?;
+            Ok(Motion::Spin { axis, rate: TimeSeries { points } })
         }
         _ => {
             let why = "does not apply to a `table` motion";

@@ -7,7 +7,7 @@ use glam::DVec3;
 
 use super::bodies::unknown_body;
 use super::raw::{RawCable, RawEnd, RawWinch, S};
-use super::types::{Body, Cable, CableEnd, CableSide, TimeSeries, Winch};
+use super::types::{Body, Cable, CableEnd, CableSide, PointLoad, TimeSeries, Winch};
 use super::validate::{fmt_num, fmt_vec, list, Ctx, Res, Rule};
 use super::Location;
 use crate::cable::{preset, PRESET_NAMES};
@@ -113,8 +113,39 @@ fn cable(
         end: end_,
         path,
         contacts: r.contacts.as_ref().is_none_or(|c| *c.get_ref()),
+        loads: loads(ctx, r, o, length)?,
+        stress_free: r.stress_free.as_ref().is_some_and(|c| *c.get_ref()),
         location: ctx.loc(raw.span()),
     })
+}
+
+/// The `loads = [{ s, force, moment }, ...]` list.
+fn loads(ctx: &Ctx<'_>, r: &RawCable, o: &str, length: f64) -> Res<Vec<PointLoad>> {
+    let Some(list) = &r.loads else {
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::with_capacity(list.get_ref().len());
+    for (i, item) in list.get_ref().iter().enumerate() {
+        let l = item.get_ref();
+        let o = &format!("{o}: load {}", i + 1);
+        let s = ctx.check(&l.s, o, "s", Rule::NonNegative, "m")?;
+        if s > length {
+            return Err(ctx.err(
+                l.s.span(),
+                format!(
+                    "{o}: `s` must be at most the cable's `length` {} m, found {}",
+                    fmt_num(length),
+                    fmt_num(s)
+                ),
+            ));
+        }
+        out.push(PointLoad {
+            s,
+            force: ctx.vec3(&l.force, o, "force", "N")?,
+            moment: ctx.vec3_or(&l.moment, o, "moment", "N·m", DVec3::ZERO)?,
+        });
+    }
+    Ok(out)
 }
 
 /// A `start`/`end` table.

@@ -34,7 +34,8 @@ pub use self::probes::{Component, Probe, ProbeTarget, Quantity};
 pub use self::span::Location;
 pub use self::types::{
     Body, BodyKind, Cable, CableEnd, CableSide, Drive, Environment, IntegratorChoice, Joint,
-    JointKind, Motion, Scenario, Shape, Simulation, TimeSeries, Winch, INTEGRATOR_NAMES,
+    JointKind, Motion, PointLoad, Scenario, Shape, Simulation, TimeSeries, Winch,
+    INTEGRATOR_NAMES,
 };
 
 /// Read and validate the scenario file at `path`.

@@ -113,6 +113,8 @@ pub(crate) struct RawSimulation {
     pub w: Option<S<f64>>,
     pub gravity: Option<Vector>,
     pub output_interval: Option<S<f64>>,
+    pub statics: Option<S<bool>>,
+    pub static_load_steps: Option<S<i64>>,
 }
 
 /// `[[body]]`.
@@ -147,6 +149,8 @@ pub(crate) struct RawMotion {
     pub period: Option<S<f64>>,
     pub phase: Option<S<f64>>,
     pub points: Option<S<Datum>>,
+    pub axis: Option<Vector>,
+    pub rate: Option<S<Datum>>,
 }
 
 /// `[[joint]]`.
@@ -198,6 +202,17 @@ pub(crate) struct RawCable {
     pub end: Option<S<RawEnd>>,
     pub path: Option<S<Vec<Vector>>>,
     pub contacts: Option<S<bool>>,
+    pub loads: Option<S<Vec<S<RawLoad>>>>,
+    pub stress_free: Option<S<bool>>,
+}
+
+/// One entry of a cable's `loads = [{ s, force, moment }, ...]`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawLoad {
+    pub s: S<f64>,
+    pub force: Vector,
+    pub moment: Option<Vector>,
 }
 
 /// A cable's `start = { ... }` or `end = { ... }`.

@@ -2,7 +2,7 @@
 //!
 //! Field-by-field reference: `docs/scenario.md`.
 
-use std::ops::{Add, Mul, Sub};
+use std::ops::{Add, Div, Mul, Sub};
 use std::path::PathBuf;
 
 use glam::{DQuat, DVec3};
@@ -75,6 +75,13 @@ pub struct Simulation {
     pub gravity: DVec3,
     /// Time between rows of results.csv, s (≥ dt; default dt).
     pub output_interval: f64,
+    /// Start from the static equilibrium of every cable (extension;
+    /// default false): solved before t = 0 under gravity, the cables'
+    /// `loads` and their held ends.
+    pub statics: bool,
+    /// Equal load increments of that static solve (extension; ≥ 1,
+    /// default 10): the cables' `loads` are applied in this many steps.
+    pub static_load_steps: u32,
 }
 
 /// The cable integrator chosen in `[simulation]`, with the optional scheme
@@ -198,13 +205,24 @@ impl Body {
         }
     }
 
+    /// Prescribed orientation at time `t`: `rotation`, turned by a `spin`
+    /// motion's angle about its axis.
+    pub fn rotation_at(&self, t: f64) -> DQuat {
+        match &self.motion {
+            Some(m) => m.rotation_at(t) * self.rotation,
+            None => self.rotation,
+        }
+    }
+
     /// World position at time 0 of the body-local point `local`, m.
     pub fn world_point(&self, local: DVec3) -> DVec3 {
-        self.position_at(0.0) + self.rotation * local
+        self.position_at(0.0) + self.rotation_at(0.0) * local
     }
 }
 
-/// Prescribed translation of a kinematic body (its rotation stays constant).
+/// Prescribed motion of a kinematic body: a translation (`Sine`, `Table`;
+/// the rotation stays constant) or a rotation about a fixed axis through
+/// the body origin (`Spin`; the position stays constant).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Motion {
     /// `base + amplitude · sin(2π t / period + phase)`.
@@ -222,6 +240,16 @@ pub enum Motion {
         /// The points.
         points: Vec<(f64, DVec3)>,
     },
+    /// Rotation about the world axis `axis` through the body origin
+    /// (`position`) at the angular rate `rate` (extension). The angle is
+    /// the exact integral of the piecewise-linear rate from t = 0.
+    Spin {
+        /// Unit axis, world frame (the file's axis normalised).
+        axis: DVec3,
+        /// Angular rate against time, rad/s (the file gives deg/s); the end
+        /// values hold outside the table.
+        rate: TimeSeries,
+    },
 }
 
 impl Motion {
@@ -235,6 +263,40 @@ impl Motion {
                 phase,
             } => base + *amplitude * (std::f64::consts::TAU * t / period + phase).sin(),
             Motion::Table { points } => interpolate(points, t).unwrap_or(base),
+            Motion::Spin { .. } => base,
+        }
+    }
+
+    /// Rotation turned by the motion from t = 0 to `t` (identity for the
+    /// translations): the body's orientation is this times its `rotation`.
+    pub fn rotation_at(&self, t: f64) -> DQuat {
+        match self {
+            Motion::Spin { axis, rate } => DQuat::from_axis_angle(*axis, rate.integral(0.0, t)),
+            _ => DQuat::IDENTITY,
+        }
+    }
+
+    /// Angular velocity at time `t`, rad/s, world frame (zero for the
+    /// translations).
+    pub fn angular_velocity_at(&self, t: f64) -> DVec3 {
+        match self {
+            Motion::Spin { axis, rate } => *axis * rate.value_at(t),
+            _ => DVec3::ZERO,
+        }
+    }
+
+    /// Angular acceleration at time `t`, rad/s², world frame: the slope of
+    /// the rate segment that contains `t` (the mean of the two at a
+    /// breakpoint, see [`TimeSeries::slope_at`], except at t = 0, where the
+    /// run starts: there the slope after it); zero outside the table and
+    /// for the translations.
+    pub fn angular_acceleration_at(&self, t: f64) -> DVec3 {
+        match self {
+            Motion::Spin { axis, rate } => {
+                let t = if t.abs() <= 1e-9 { 3e-9 } else { t };
+                *axis * rate.slope_at(t)
+            }
+            _ => DVec3::ZERO,
         }
     }
 
@@ -251,6 +313,7 @@ impl Motion {
                 *amplitude * w * (w * t + phase).cos()
             }
             Motion::Table { points } => slope(points, t).unwrap_or(DVec3::ZERO),
+            Motion::Spin { .. } => DVec3::ZERO,
         }
     }
 }
@@ -267,6 +330,48 @@ impl TimeSeries {
     /// Value at time `t` (0 for an empty series).
     pub fn value_at(&self, t: f64) -> f64 {
         interpolate(&self.points, t).unwrap_or(0.0)
+    }
+
+    /// Slope of the segment that contains `t`, 0 outside the table; at a
+    /// breakpoint (within 1e-9·max(1, |t|) s, so that times accumulated in
+    /// floating point land on it) the mean of the slopes on either side,
+    /// so that a time stepper sampling the breakpoints is not biased toward
+    /// one segment.
+    pub fn slope_at(&self, t: f64) -> f64 {
+        let eps = 1e-9 * t.abs().max(1.0);
+        let i = self.points.partition_point(|p| p.0 <= t + eps);
+        let at_breakpoint = i
+            .checked_sub(1)
+            .and_then(|k| self.points.get(k))
+            .is_some_and(|p| p.0 >= t - eps);
+        let one = |t: f64| slope(&self.points, t).unwrap_or(0.0);
+        if at_breakpoint {
+            0.5 * (one(t - 2.0 * eps) + one(t + 2.0 * eps))
+        } else {
+            one(t)
+        }
+    }
+
+    /// Exact integral of the piecewise-linear function from `a` to `b`
+    /// (negative for b < a), the end values held outside the table
+    /// (0 for an empty series or a non-finite bound).
+    pub fn integral(&self, a: f64, b: f64) -> f64 {
+        if !(a.is_finite() && b.is_finite()) {
+            return 0.0;
+        }
+        if b < a {
+            return -self.integral(b, a);
+        }
+        if self.points.is_empty() {
+            return 0.0;
+        }
+        // Breakpoints inside (a, b), then the trapezoids between them.
+        let mut xs = vec![a];
+        xs.extend(self.points.iter().map(|p| p.0).filter(|&x| x > a && x < b));
+        xs.push(b);
+        xs.windows(2)
+            .map(|w| 0.5 * (w[1] - w[0]) * (self.value_at(w[0]) + self.value_at(w[1])))
+            .sum()
     }
 }
 
@@ -289,7 +394,10 @@ where
 }
 
 /// Slope of the segment of `points` that contains `t` (None outside).
-fn slope(points: &[(f64, DVec3)], t: f64) -> Option<DVec3> {
+fn slope<T>(points: &[(f64, T)], t: f64) -> Option<T>
+where
+    T: Copy + Sub<Output = T> + Div<f64, Output = T>,
+{
     let i = points.partition_point(|p| p.0 <= t);
     let (a, b) = (points.get(i.checked_sub(1)?)?, points.get(i)?);
     Some((b.1 - a.1) / (b.0 - a.0))
@@ -418,6 +526,12 @@ pub struct Cable {
     pub path: Vec<DVec3>,
     /// Contacts with colliders and other cables (default true).
     pub contacts: bool,
+    /// Constant point loads, fixed in world direction, for the whole run
+    /// (extension; default none).
+    pub loads: Vec<PointLoad>,
+    /// The `path` is the stress-free shape (a pre-curved beam) instead of
+    /// a deformed straight cable (extension; default false).
+    pub stress_free: bool,
     /// Where the `[[cable]]` table starts.
     pub location: Location,
 }
@@ -427,6 +541,19 @@ impl Cable {
     pub fn path_length(&self) -> f64 {
         self.path.windows(2).map(|w| w[0].distance(w[1])).sum()
     }
+}
+
+/// A constant point load on a cable (extension): a force and a moment of
+/// fixed world direction at one point of the cable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointLoad {
+    /// Arc length from the start along the unstretched cable, m
+    /// (0 ≤ s ≤ `length`).
+    pub s: f64,
+    /// Force, N, world frame.
+    pub force: DVec3,
+    /// Moment, N·m, world frame (default zero).
+    pub moment: DVec3,
 }
 
 /// `[environment]`.

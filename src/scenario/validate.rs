@@ -441,6 +441,28 @@ fn simulation(ctx: &Ctx<'_>, raw: &S<RawSimulation>) -> Res<Simulation> {
         }
         None => dt,
     };
+    let statics = r.statics.as_ref().is_some_and(|v| *v.get_ref());
+    let static_load_steps = match &r.static_load_steps {
+        Some(v) if !statics => {
+            return Err(ctx.err(
+                v.span(),
+                format!("{o}: `static_load_steps` only applies with `statics = true`"),
+            ))
+        }
+        Some(v) => {
+            let n = *v.get_ref();
+            u32::try_from(n)
+                .ok()
+                .filter(|n| (1..=10_000).contains(n))
+                .ok_or_else(|| {
+                    ctx.err(
+                        v.span(),
+                        format!("{o}: `static_load_steps` must be between 1 and 10000, found {n}"),
+                    )
+                })?
+        }
+        None => 10,
+    };
     Ok(Simulation {
         duration,
         dt,
@@ -454,6 +476,8 @@ fn simulation(ctx: &Ctx<'_>, raw: &S<RawSimulation>) -> Res<Simulation> {
             DVec3::new(0.0, -9.81, 0.0),
         )?,
         output_interval,
+        statics,
+        static_load_steps,
     })
 }
 

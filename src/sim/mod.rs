@@ -3,4 +3,4 @@
 //! steps them frame by frame and samples the probes. `cablesim run` uses it;
 //! the Bevy plugin steps the same [`Cable`](crate::cable::Cable)s.
 mod world;
-pub use self::world::{shape_inertia, SimError, World};
+pub use self::world::{shape_inertia, SimError, World, STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};

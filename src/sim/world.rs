@@ -14,6 +14,16 @@
 //!   `c = m/(2 dt)`, saturating at `max_force`).
 //!
 //! * A free start floats (the path gives its initial shape).
+//! * A kinematic body with a `spin` motion turns the base of a cable that
+//!   starts on it (orientation, the anchor point's velocity and
+//!   acceleration, angular velocity and acceleration); a cable end on it
+//!   is an anchor spring to the turning point (a clamped end is refused).
+//! * A cable's `loads` are constant point loads on its chain
+//!   ([`Cable::add_point_load_and_moment`]); `stress_free` maps to
+//!   [`RopeBuilder::stress_free_shape`]; `[simulation] statics = true` puts
+//!   every cable into its static equilibrium before t = 0
+//!   ([`Cable::solve_static`], [`STATIC_TOLERANCE`],
+//!   [`STATIC_MAX_ITERATIONS`]), or fails with [`SimError::Static`].
 //!
 //! Anything else (a dynamic body held by several cables or joints, a cable
 //! starting on a free dynamic body, winches, contact
@@ -58,6 +68,19 @@ pub enum SimError {
     /// The integrator setting is invalid.
     #[error("{file}: [simulation] integrator: {0}", file = .1)]
     Integrator(String, String),
+    /// `[simulation] statics = true`: no static equilibrium found for a
+    /// cable.
+    #[error("{file}:{location}: cable `{cable}`: {source}")]
+    Static {
+        /// Scenario file.
+        file: String,
+        /// Where the cable is defined.
+        location: Location,
+        /// Cable name.
+        cable: String,
+        /// What the static solve reported.
+        source: CableError,
+    },
     /// A cable diverged or its step failed.
     #[error("cable `{cable}` failed at t = {time} s: {source}")]
     Diverged {
@@ -69,6 +92,12 @@ pub enum SimError {
         source: CableError,
     },
 }
+
+/// Convergence tolerance of the static solve (`statics = true`): no
+/// coordinate moves by more than this in the last iteration, m or rad.
+pub const STATIC_TOLERANCE: f64 = 1e-9;
+/// Iteration limit of the static solve, per load step.
+pub const STATIC_MAX_ITERATIONS: usize = 500;
 
 /// Rotational inertia (kg·m², body frame, about the centre) of a uniform
 /// solid of mass `mass` (kg) and shape `shape`.
@@ -171,6 +200,18 @@ impl World {
                 return Err(unsupported(j.location, format!("joint `{}` between dynamic bodies", j.name)));
             }
         }
+        if sim.statics {
+            // Start from the static equilibrium (gravity, loads, held ends).
+            let steps = sim.static_load_steps as usize;
+            for (sc_cable, c) in scenario.cables.iter().zip(&mut cables) {
+                c.cable.solve_static(steps, STATIC_TOLERANCE, STATIC_MAX_ITERATIONS).map_err(|source| SimError::Static {
+                    file: file.clone(),
+                    location: sc_cable.location,
+                    cable: c.name.clone(),
+                    source,
+                })?;
+            }
+        }
         let substeps = sim.substeps.unwrap_or(1);
         for c in &mut cables {
             if !scheme.is_explicit() {
@@ -235,8 +276,9 @@ impl World {
             }
         }
         let b = self.scenario.body(name).expect("probe targets are validated");
-        let v = b.motion.as_ref().map_or(DVec3::ZERO, |m| m.velocity_at(self.time));
-        (b.position_at(self.time), DMat3::from_quat(b.rotation), v, DVec3::ZERO)
+        let t = self.time;
+        let (v, w) = b.motion.as_ref().map_or((DVec3::ZERO, DVec3::ZERO), |m| (m.velocity_at(t), m.angular_velocity_at(t)));
+        (b.position_at(t), DMat3::from_quat(b.rotation_at(t)), v, w)
     }
 
     fn probe(&self, p: &scenario::Probe) -> Probe {
@@ -330,24 +372,30 @@ fn lumped(b: &scenario::Body) -> LumpedBody {
     LumpedBody { mass, inertia: shape_inertia(&b.shape, mass), position: b.position, rotation: DMat3::from_quat(b.rotation), com: DVec3::ZERO }
 }
 
-/// Base motion of a point `anchor` of a fixed or kinematic body.
+/// Base motion of a point `anchor` of a fixed or kinematic body: the body
+/// frame at the anchor point, with the point's velocity and acceleration
+/// (for a `spin`: ω × r and α × r + ω × (ω × r), r the anchor's offset
+/// from the axis point, the body origin) and the body's angular velocity
+/// and acceleration.
 fn body_base(b: &scenario::Body, anchor: DVec3) -> BaseMotion {
     let rot = DMat3::from_quat(b.rotation);
-    let offset = rot * anchor;
     match &b.motion {
-        None => BaseMotion::Fixed(BaseState::fixed(rot, b.position + offset)),
+        None => BaseMotion::Fixed(BaseState::fixed(rot, b.position + rot * anchor)),
         Some(m) => {
-            let (m, base) = (m.clone(), b.position);
+            let (m, base, r0) = (m.clone(), b.position, b.rotation);
             BaseMotion::Prescribed(Arc::new(move |t| {
                 let eps = 1e-5;
                 let acc = (m.velocity_at(t + eps) - m.velocity_at(t - eps)) / (2.0 * eps);
+                let rot = DMat3::from_quat(m.rotation_at(t) * r0);
+                let r = rot * anchor;
+                let (w, al) = (m.angular_velocity_at(t), m.angular_acceleration_at(t));
                 BaseState {
                     rotation: rot,
-                    position: m.position_at(t, base) + offset,
-                    angular_velocity: DVec3::ZERO,
-                    velocity: m.velocity_at(t),
-                    angular_acceleration: DVec3::ZERO,
-                    acceleration: acc,
+                    position: m.position_at(t, base) + r,
+                    angular_velocity: w,
+                    velocity: m.velocity_at(t) + w.cross(r),
+                    angular_acceleration: al,
+                    acceleration: acc + al.cross(r) + w.cross(w.cross(r)),
                 }
             }))
         }
@@ -367,7 +415,8 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
     let mut builder = RopeBuilder::new(c.length, c.segments as usize, section, c.diameter)
         .damping(c.damping)
         .gravity(sc.simulation.gravity)
-        .path(c.path.clone());
+        .path(c.path.clone())
+        .stress_free_shape(c.stress_free);
     if let Some(ga) = c.shear_stiffness {
         builder = builder.shear_stiffness(ga);
     }
@@ -418,11 +467,16 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
                 bodies.push((body.clone(), BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
                 builder.end(RopeEnd::Body { body: lumped(b), anchor: *anchor, clamp: *clamp })
             } else {
+                let spins = matches!(b.motion, Some(scenario::Motion::Spin { .. }));
+                if spins && *clamp {
+                    // The end spring's orientation hold has a constant target.
+                    return Err(unsupported(format!("cable `{}` with its `end` clamped to spinning body `{body}` (clamp the `start` instead)", c.name)));
+                }
                 let (b, a) = (b.clone(), *anchor);
-                let rot = DMat3::from_quat(b.rotation);
                 let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |t| {
-                    let v = b.motion.as_ref().map_or(DVec3::ZERO, |m| m.velocity_at(t));
-                    (b.position_at(t) + rot * a, v)
+                    let r = DMat3::from_quat(b.rotation_at(t)) * a;
+                    let (v, w) = b.motion.as_ref().map_or((DVec3::ZERO, DVec3::ZERO), |m| (m.velocity_at(t), m.angular_velocity_at(t)));
+                    (b.position_at(t) + r, v + w.cross(r))
                 });
                 builder.end(if *clamp { RopeEnd::Clamped(target) } else { RopeEnd::Pinned(target) })
             }
@@ -433,7 +487,10 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
     if let Some((_, b)) = bodies.iter_mut().find(|(_, b)| b.link == usize::MAX) {
         *b = model.layout.end_body.expect("end body built");
     }
-    let cable = Cable::new(model, scheme.clone())
+    let mut cable = Cable::new(model, scheme.clone())
         .map_err(|source| SimError::Diverged { cable: c.name.clone(), time: 0.0, source })?;
+    for l in &c.loads {
+        cable.add_point_load_and_moment(l.s, l.force, l.moment);
+    }
     Ok(SimCable { name: c.name.clone(), cable, bodies, slide })
 }
