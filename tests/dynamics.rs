@@ -252,3 +252,44 @@ fn payload_pose_is_reported_where_the_body_is() {
     assert!(p.distance(body_pos) < 1e-9);
     assert!((r - DMat3::IDENTITY).abs_diff_eq(DMat3::ZERO, 1e-12));
 }
+
+/// `Cable::set_link_velocities` on a 20 m steel rope (EA 2e7 N, EI 50,
+/// μ 1.6 kg/m) with a 1 t payload hanging at rest in static equilibrium:
+/// given a horizontal u0 = 0.5 m/s, the payload has it exactly, and the
+/// rope moves in the shape a horizontal force at the payload would
+/// deflect it into (the rates of least stiffness energy), not with a kink:
+/// slope ∝ 1/T(s) with T(s) = m g + μ g (L − s), so the node at arc length
+/// s moves at u0 ln(T(0)/T(s)) / ln(T(0)/T(L)). Then the swing amplitude is
+/// u0/ω with ω from the measured period (the energy went into the swing
+/// mode, not into rope waves).
+#[test]
+fn initial_payload_velocity_swings_the_rope_in_its_deflection_shape() {
+    let (l, m, r, u0, mu, g) = (20.0, 1000.0, 0.3, 0.5, 1.6, 9.81);
+    let n = 40;
+    let model = pendulum(l, n, section(mu, 2e7, 50.0, 35.0), m, r, 0.0);
+    let mut c = Cable::new(model, Scheme::default()).unwrap();
+    c.solve_static(1, 1e-10, 500).unwrap();
+    let body = c.model.layout.end_body.unwrap();
+    c.set_link_velocities(&[LinkVelocity { link: body.link, point: body.origin, linear: DVec3::new(u0, 0.0, 0.0), angular: DVec3::ZERO }])
+        .unwrap();
+    let (_, _, v, w) = c.model.body_state(&body);
+    println!("payload velocity {v:?} m/s, angular {w:?} rad/s");
+    assert!(v.distance(DVec3::new(u0, 0.0, 0.0)) < 1e-9 && w.length() < 1e-9);
+    let tension = |s: f64| m * g + mu * g * (l - s);
+    let profile = |s: f64| u0 * (tension(0.0) / tension(s)).ln() / (tension(0.0) / tension(l)).ln();
+    let worst = c.node_velocities().iter().enumerate().map(|(i, vx)| vx.distance(DVec3::new(profile(l * i as f64 / n as f64), 0.0, 0.0))).fold(0.0, f64::max);
+    let rigid = c.node_velocities().iter().enumerate().map(|(i, vx)| (vx.x - u0 * i as f64 / n as f64).abs()).fold(0.0, f64::max);
+    println!("largest node deviation from the deflection shape {worst:.3e} m/s (from a straight rope {rigid:.3e} m/s)");
+    assert!(worst < 1e-5 * u0, "{worst}");
+    let (mut t, mut x) = (Vec::new(), Vec::new());
+    for _ in 0..(3.0 * 9.0 * 60.0) as usize {
+        c.step(1.0 / 60.0).unwrap();
+        t.push(c.time());
+        x.push(c.model.body_state(&body).0.x);
+    }
+    let period = mean_period(&upward_crossings(&t, &x.iter().map(|v| -v).collect::<Vec<_>>()));
+    let amp = 0.5 * (x.iter().cloned().fold(f64::MIN, f64::max) - x.iter().cloned().fold(f64::MAX, f64::min));
+    let expected = u0 * period / (2.0 * std::f64::consts::PI);
+    println!("period {period:.5} s, amplitude {amp:.6} m vs u0/ω {expected:.6} m: {:+.2e}", amp / expected - 1.0);
+    assert!((amp / expected - 1.0).abs() < 1e-3);
+}

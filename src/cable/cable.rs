@@ -2,6 +2,7 @@
 //! the queries users read (node positions, tension, moments, energy).
 
 use super::chain::{LinkLoad, StaticError};
+use super::spatial::V6;
 use super::rope::{RopeModel, ELEMENT_DOFS};
 use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
 use glam::{DMat3, DVec3};
@@ -23,6 +24,15 @@ pub enum CableError {
         /// What the static solver reported.
         source: StaticError,
     },
+    /// [`Cable::set_link_velocities`]: a velocity the chain cannot take
+    /// (e.g. a trolley moving across its rail), or a bad target.
+    #[error("cannot give link {link} its velocity: {reason}")]
+    Velocity {
+        /// Sub-joint index of the link.
+        link: usize,
+        /// What is wrong.
+        reason: String,
+    },
     /// The state left physical sense (non-finite, or an element stretched
     /// or compressed by more than its length).
     #[error("cable diverged at t = {time} s: {reason}")]
@@ -32,6 +42,21 @@ pub enum CableError {
         /// What went wrong.
         reason: String,
     },
+}
+
+/// A velocity to give a link of the chain at the start of a run (see
+/// [`Cable::set_link_velocities`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinkVelocity {
+    /// Sub-joint index whose link is meant (a body's
+    /// [`BodyInChain::link`](super::rope::BodyInChain)).
+    pub link: usize,
+    /// Point in the link frame whose velocity is `linear`, m.
+    pub point: DVec3,
+    /// World velocity of that point, m/s.
+    pub linear: DVec3,
+    /// World angular velocity of the link, rad/s.
+    pub angular: DVec3,
 }
 
 /// A rope stepped in time.
@@ -335,6 +360,119 @@ impl Cable {
         Ok(iterations)
     }
 
+    /// Gives links of the chain (the bodies it carries) the velocities in
+    /// `targets`, by setting the joint rates; positions are unchanged, the
+    /// acceleration is recomputed. Meant for the start of a run (a payload
+    /// already swinging, a trolley already moving).
+    ///
+    /// The rates chosen are those that give the targets with the least
+    /// stiffness energy rate: the minimum of `½ vᵀ (K_t + M/c) v` (tangent
+    /// stiffness with the tension's geometric part, mass weighted by `1/c`,
+    /// c = 1e6 s², so the mass only decides among motions that cost no
+    /// stiffness energy) under the target
+    /// constraints `J v = V`: the rope moves in the shape the bodies'
+    /// impulse would deflect it into statically (a hanging payload given a
+    /// swing velocity swings with the rope in its deflection shape, slope
+    /// ∝ 1/tension), not with a kink at the body as the least-kinetic-energy
+    /// (impulsive) rates would give. Free directions (a rope that can turn
+    /// about its pin without straining) cost nothing in `K_t` and are
+    /// decided by the mass term. Solved with the O(n)
+    /// articulated-body solve of `M + c K_t`, six right-hand sides per
+    /// target, and a symmetric 6k×6k system (pseudo-inverse: directions
+    /// the chain cannot move in are left out). A target the chain cannot
+    /// reach (more than 1e-6 of the largest velocity given, or 1e-9 m/s)
+    /// is an error and leaves the state as it was. Velocities of links not
+    /// listed are free: list every body whose velocity matters, at zero if
+    /// it starts at rest.
+    pub fn set_link_velocities(&mut self, targets: &[LinkVelocity]) -> Result<(), CableError> {
+        let n = self.state.q.len();
+        for tg in targets {
+            let bad = |reason: &str| Err(CableError::Velocity { link: tg.link, reason: reason.into() });
+            if tg.link >= n {
+                return bad(&format!("the chain has {n} links"));
+            }
+            if !(tg.point.is_finite() && tg.linear.is_finite() && tg.angular.is_finite()) {
+                return bad("non-finite point or velocity");
+            }
+        }
+        if targets.is_empty() {
+            return Ok(());
+        }
+        const C: f64 = 1e6;
+        let t = self.state.t;
+        let q = self.state.q.clone();
+        let zero = vec![0.0; n];
+        let mut r = vec![0.0; n];
+        let system = |source| CableError::Integrate(IntegrateError::System { t, source });
+        let ch = &mut self.model.chain;
+        // Link velocities with all rates zero: what the base alone gives.
+        ch.residual_into(t, &q, &zero, &zero, &mut r).map_err(system)?;
+        let m = 6 * targets.len();
+        let split = |x: V6| [x.top.x, x.top.y, x.top.z, x.bot.x, x.bot.y, x.bot.z];
+        let mut want = Vec::with_capacity(m);
+        for tg in targets {
+            let p = ch.link_point(tg.link, tg.point) - ch.origin;
+            let target = V6::new(tg.angular, tg.linear - tg.angular.cross(p));
+            want.extend(split(target - ch.link_velocity(tg.link)));
+        }
+        // Responses u = (M + c K_t)⁻¹ Jᵀ e to unit spatial forces e on each
+        // target link (generalized force S_s·e on every sub-joint inboard).
+        let link_velocity = |ch: &super::chain::Chain, x: &[f64], link: usize| {
+            ch.rows[..=link].iter().zip(x).fold(V6::ZERO, |acc, (row, xs)| acc + row.s * *xs)
+        };
+        let mut responses = vec![vec![0.0; n]; m];
+        let mut rhs = vec![0.0; n];
+        for (i, tg) in targets.iter().enumerate() {
+            for k in 0..6 {
+                let mut e = [0.0; 6];
+                e[k] = 1.0;
+                let e = V6::new(DVec3::new(e[0], e[1], e[2]), DVec3::new(e[3], e[4], e[5]));
+                for (s, b) in rhs.iter_mut().enumerate() {
+                    *b = if s <= tg.link { ch.rows[s].s.dot(e) } else { 0.0 };
+                }
+                ch.solve_into(0.0, C, &rhs, &mut responses[6 * i + k]).map_err(system)?;
+            }
+        }
+        let mut a = vec![0.0; m * m];
+        for (i, tg) in targets.iter().enumerate() {
+            for (b, u) in responses.iter().enumerate() {
+                for (k, x) in split(link_velocity(ch, u, tg.link)).iter().enumerate() {
+                    a[(6 * i + k) * m + b] = *x;
+                }
+            }
+        }
+        let lambda = symmetric_pseudo_solve(&a, &want, m);
+        let mut v = vec![0.0; n];
+        for (u, l) in responses.iter().zip(&lambda) {
+            v.iter_mut().zip(u).for_each(|(vs, us)| *vs += l * us);
+        }
+        // Did every target get its velocity?
+        let scale = want.iter().fold(0.0f64, |acc, x| acc.max(x.abs()));
+        for (i, tg) in targets.iter().enumerate() {
+            let got = split(link_velocity(ch, &v, tg.link));
+            let miss = got.iter().zip(&want[6 * i..6 * i + 6]).fold(0.0f64, |acc, (g, w)| acc.max((g - w).abs()));
+            if miss > 1e-6 * scale + 1e-9 {
+                ch.residual_into(t, &q, &self.state.v, &self.state.a, &mut r).map_err(system)?;
+                return Err(CableError::Velocity {
+                    link: tg.link,
+                    reason: format!(
+                        "{miss:.3e} (m/s or rad/s) of it is a motion the chain cannot make (a trolley moves along its rail only, \
+                         a pinned end cannot move)"
+                    ),
+                });
+            }
+        }
+        let old = std::mem::replace(&mut self.state.v, v);
+        if let Err(e) = self.state.recompute_acceleration(&mut self.model.chain) {
+            self.state.v = old;
+            let _ = self.state.recompute_acceleration(&mut self.model.chain);
+            self.refresh();
+            return Err(e.into());
+        }
+        self.refresh();
+        Ok(())
+    }
+
     /// Adds a distributed load: `load(element, midpoint, midpoint velocity)`
     /// returns the force per unit length (N/m, world frame) on that element,
     /// applied at its midpoint over its unstretched length (contact, wind and
@@ -359,4 +497,61 @@ impl Cable {
     pub const fn element_dofs() -> usize {
         ELEMENT_DOFS
     }
+}
+
+/// Solves the symmetric positive semi-definite system `a x = b` (`m × m`,
+/// row-major) in the least-squares sense: cyclic Jacobi eigen-decomposition,
+/// eigenvalues below 1e-12 of the largest left out.
+fn symmetric_pseudo_solve(a: &[f64], b: &[f64], m: usize) -> Vec<f64> {
+    // Symmetrize (round-off of the two products).
+    let mut d: Vec<f64> = (0..m * m).map(|k| 0.5 * (a[k] + a[(k % m) * m + k / m])).collect();
+    let mut vecs: Vec<f64> = (0..m * m).map(|k| if k / m == k % m { 1.0 } else { 0.0 }).collect();
+    for _sweep in 0..60 {
+        let off: f64 = (0..m * m).filter(|k| k / m != k % m).map(|k| d[k] * d[k]).sum();
+        let diag: f64 = (0..m).map(|i| d[i * m + i] * d[i * m + i]).sum();
+        if off <= 1e-30 * diag || off == 0.0 {
+            break;
+        }
+        for p in 0..m {
+            for q in p + 1..m {
+                let apq = d[p * m + q];
+                if apq == 0.0 {
+                    continue;
+                }
+                let theta = (d[q * m + q] - d[p * m + p]) / (2.0 * apq);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let t = if theta == 0.0 { 1.0 } else { t };
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                for k in 0..m {
+                    let (dkp, dkq) = (d[k * m + p], d[k * m + q]);
+                    d[k * m + p] = c * dkp - s * dkq;
+                    d[k * m + q] = s * dkp + c * dkq;
+                }
+                for k in 0..m {
+                    let (dpk, dqk) = (d[p * m + k], d[q * m + k]);
+                    d[p * m + k] = c * dpk - s * dqk;
+                    d[q * m + k] = s * dpk + c * dqk;
+                }
+                for k in 0..m {
+                    let (vkp, vkq) = (vecs[k * m + p], vecs[k * m + q]);
+                    vecs[k * m + p] = c * vkp - s * vkq;
+                    vecs[k * m + q] = s * vkp + c * vkq;
+                }
+            }
+        }
+    }
+    let largest = (0..m).fold(0.0f64, |acc, i| acc.max(d[i * m + i].abs()));
+    let mut x = vec![0.0; m];
+    for j in 0..m {
+        let lam = d[j * m + j];
+        if lam.abs() <= 1e-12 * largest || lam == 0.0 {
+            continue;
+        }
+        let proj: f64 = (0..m).map(|k| vecs[k * m + j] * b[k]).sum::<f64>() / lam;
+        for k in 0..m {
+            x[k] += proj * vecs[k * m + j];
+        }
+    }
+    x
 }

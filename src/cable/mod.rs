@@ -11,4 +11,4 @@ pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, R
 mod tangent_tests;
 #[allow(clippy::module_inception)]
 pub mod cable;
-pub use self::cable::{Cable, CableError, ElementForces};
+pub use self::cable::{Cable, CableError, ElementForces, LinkVelocity};

@@ -2,7 +2,7 @@
 
 use super::components::{BaseSample, CableAnchor, CableDescriptor, CableDiverged, CableSim, CableState, CarriedBody};
 use super::CableSettings;
-use crate::cable::{BaseMotion, BaseState, BodyInChain, Cable, LinkLoad, LumpedBody, RopeBuilder, RopeEnd, RopeStart};
+use crate::cable::{BaseMotion, BaseState, BodyInChain, Cable, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeStart};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier3d::rapier::dynamics::{RigidBody as RapierBody, RigidBodyType};
@@ -192,7 +192,7 @@ pub(crate) fn init_cables(
                 }
             }
         }
-        let cable = match Cable::new(model, d.scheme.clone()) {
+        let mut cable = match Cable::new(model, d.scheme.clone()) {
             Ok(c) => c,
             Err(e) => {
                 fail(e.to_string());
@@ -200,6 +200,27 @@ pub(crate) fn init_cables(
                 continue;
             }
         };
+        // The carried bodies' rapier velocities (at their centres of mass)
+        // become the chain's initial rates.
+        let targets: Vec<LinkVelocity> = carried
+            .iter()
+            .filter_map(|(be, c)| match c {
+                CarriedBody::Lumped(b) => body(*be).map(|rb| LinkVelocity {
+                    link: b.link,
+                    point: b.origin + b.rotation * rb.mass_properties().local_mprops.local_com.as_dvec3(),
+                    linear: rb.linvel().as_dvec3(),
+                    angular: rb.angvel().as_dvec3(),
+                }),
+                _ => None,
+            })
+            .collect();
+        if targets.iter().any(|t| t.linear != DVec3::ZERO || t.angular != DVec3::ZERO) {
+            if let Err(e) = cable.set_link_velocities(&targets) {
+                fail(e.to_string());
+                commands.entity(entity).remove::<CableDescriptor>();
+                continue;
+            }
+        }
         // Bodies the cable carries become kinematic in rapier: the cable moves them.
         for (be, c) in &carried {
             if matches!(c, CarriedBody::Lumped(_)) {

@@ -24,6 +24,9 @@
 //!   every cable into its static equilibrium before t = 0
 //!   ([`Cable::solve_static`], [`STATIC_TOLERANCE`],
 //!   [`STATIC_MAX_ITERATIONS`]), or fails with [`SimError::Static`].
+//! * Initial `linear_velocity` / `angular_velocity` of carried bodies set
+//!   the chain's rates ([`Cable::set_link_velocities`], after the static
+//!   start), or fail with [`SimError::InitialVelocity`].
 //!
 //! Anything else (a dynamic body held by several cables or joints, a cable
 //! starting on a free dynamic body, winches, contact
@@ -31,7 +34,7 @@
 //! position, rather than simulated wrongly.
 
 use crate::cable::{
-    BaseMotion, BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeEnd, RopeError,
+    BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError,
     RopeSection, RopeStart,
 };
 use crate::integrate::{Scheme, SchemeParams, Substeps};
@@ -79,7 +82,21 @@ pub enum SimError {
         /// Cable name.
         cable: String,
         /// What the static solve reported.
-        source: CableError,
+        source: Box<CableError>,
+    },
+    /// A body's initial velocity cannot be given to the cable carrying it.
+    #[error("{file}:{location}: initial velocity of body `{body}` on cable `{cable}`: {source}")]
+    InitialVelocity {
+        /// Scenario file.
+        file: String,
+        /// Where the body is defined.
+        location: Location,
+        /// Body name.
+        body: String,
+        /// Cable name.
+        cable: String,
+        /// What went wrong.
+        source: Box<CableError>,
     },
     /// A cable diverged or its step failed.
     #[error("cable `{cable}` failed at t = {time} s: {source}")]
@@ -89,7 +106,7 @@ pub enum SimError {
         /// Simulation time at the start of the failing step, s.
         time: f64,
         /// What the cable reported.
-        source: CableError,
+        source: Box<CableError>,
     },
 }
 
@@ -174,13 +191,6 @@ impl World {
         for c in &scenario.cables {
             cables.push(build_cable(&scenario, c, &scheme, &file)?);
         }
-        // Initial body velocities are not mapped into the chains' relative
-        // rates yet: refuse rather than silently start at rest.
-        for b in scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
-            if b.linear_velocity != DVec3::ZERO || b.angular_velocity != DVec3::ZERO {
-                return Err(unsupported(b.location, format!("an initial velocity of dynamic body `{}`", b.name)));
-            }
-        }
         // Every dynamic body must be carried by exactly one cable.
         for b in scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
             let holders = cables.iter().filter(|c| c.bodies.iter().any(|(n, _)| *n == b.name)).count();
@@ -208,8 +218,31 @@ impl World {
                     file: file.clone(),
                     location: sc_cable.location,
                     cable: c.name.clone(),
-                    source,
+                    source: Box::new(source),
                 })?;
+            }
+        }
+        // Initial velocities of the carried bodies (after the static start):
+        // the chain's rates that give every body of the cable its velocity
+        // (zero if not given) with the least stiffness energy rate
+        // ([`Cable::set_link_velocities`]).
+        for c in &mut cables {
+            let bodies: Vec<_> = c.bodies.iter().filter_map(|(name, bic)| scenario.body(name).map(|b| (b, *bic))).collect();
+            if bodies.iter().all(|(b, _)| b.linear_velocity == DVec3::ZERO && b.angular_velocity == DVec3::ZERO) {
+                continue;
+            }
+            let targets: Vec<LinkVelocity> = bodies
+                .iter()
+                .map(|(b, bic)| LinkVelocity { link: bic.link, point: bic.origin, linear: b.linear_velocity, angular: b.angular_velocity })
+                .collect();
+            if let Err(source) = c.cable.set_link_velocities(&targets) {
+                let who = match &source {
+                    CableError::Velocity { link, .. } => bodies.iter().find(|(_, bic)| bic.link == *link).map(|(b, _)| *b),
+                    _ => None,
+                }
+                .or_else(|| bodies.iter().map(|(b, _)| *b).find(|b| b.linear_velocity != DVec3::ZERO || b.angular_velocity != DVec3::ZERO))
+                .expect("a body with a velocity exists here");
+                return Err(SimError::InitialVelocity { file: file.clone(), location: who.location, body: who.name.clone(), cable: c.name.clone(), source: Box::new(source) });
             }
         }
         let substeps = sim.substeps.unwrap_or(1);
@@ -238,7 +271,7 @@ impl World {
                     }
                     _ => {}
                 }
-                c.cable.step(h).map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source })?;
+                c.cable.step(h).map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source: Box::new(source) })?;
             }
         }
         self.steps += 1;
@@ -488,7 +521,7 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
         *b = model.layout.end_body.expect("end body built");
     }
     let mut cable = Cable::new(model, scheme.clone())
-        .map_err(|source| SimError::Diverged { cable: c.name.clone(), time: 0.0, source })?;
+        .map_err(|source| SimError::Diverged { cable: c.name.clone(), time: 0.0, source: Box::new(source) })?;
     for l in &c.loads {
         cable.add_point_load_and_moment(l.s, l.force, l.moment);
     }
