@@ -32,9 +32,15 @@ pub enum CableAnchor {
 
 /// Spawn an entity with this to get a cable. The plugin builds it at the
 /// next fixed step (after rapier created the bodies it hangs on) and adds
-/// [`CableSim`] and [`CableState`]. The cable starts at rest relative to its
-/// base: a base that already moves carries the whole cable (and the bodies
-/// it carries) along at its velocity.
+/// [`CableSim`] and [`CableState`]. The rapier velocities of the bodies the
+/// cable carries (payload, trolley) at that moment become the chain's
+/// initial rates ([`Cable::set_link_velocities`](crate::cable::Cable::set_link_velocities):
+/// the rope takes the shape their push would deflect it into); with all of
+/// them at rest the cable starts at rest relative to its base, and a base
+/// that already moves carries the whole cable along at its velocity. A
+/// velocity the chain cannot take (a trolley moving across its rail) is
+/// reported as a [`CableDiverged`] message at time 0 and the cable is not
+/// built.
 #[derive(Component, Debug, Clone)]
 pub struct CableDescriptor {
     /// Unstretched length, m.
