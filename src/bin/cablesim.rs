@@ -30,7 +30,7 @@ enum Command {
     Run {
         /// Scenario file (TOML).
         file: PathBuf,
-        /// Output directory (default: out/<file stem>).
+        /// Output directory (default: `out/<file stem>`).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Also write plot.png (one panel per probe).

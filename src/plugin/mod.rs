@@ -28,7 +28,7 @@
 //!   becomes a lumped link of the cable's implicit solve: the plugin turns it
 //!   into a kinematic body in rapier and moves it every step to the pose the
 //!   cable computes (so a 10 t payload on a 0.3 kg element is as stable as
-//!   the rope itself). Its [`ExternalForce`] is applied in the cable solve.
+//!   the rope itself). Its [`ExternalForce`](bevy_rapier3d::prelude::ExternalForce) is applied in the cable solve.
 //! * A **dynamic body on a prismatic joint** at a cable's start (a trolley on
 //!   its rail) becomes a prismatic link of the chain in the same way; its
 //!   `ExternalForce` along the rail drives it.
