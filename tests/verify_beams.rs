@@ -58,8 +58,8 @@ fn bend45_model(n: usize, gj_factor: f64, rot: DMat3) -> (RopeModel, DVec3) {
             rot * DVec3::new(r - r * phi.cos(), 0.0, r * phi.sin())
         })
         .collect();
-    // Statics do not depend on the mass; μ is kept small because
-    // solve_static stalls on this 78.5 m beam with μ = 1 kg/m (see
+    // Statics do not depend on the mass; μ is small (solve_static once
+    // stalled on this 78.5 m beam with μ = 1 kg/m; fixed, see
     // `solve_static_stalls_on_soft_long_cantilever`).
     let mut m = RopeBuilder::new(length, n, section(1e-3, 1e7, ei, gj), 1.0)
         .shear_stiffness(kga)
