@@ -320,6 +320,41 @@ impl RopeBuilder {
         if !self.gravity.is_finite() {
             return Err(RopeError::InvalidParameter { name: "gravity", value: f64::NAN, reason: "not finite" });
         }
+        check("end_stiffness_factor", self.end_stiffness_factor, true)?;
+        let bodies = [
+            match &self.start {
+                RopeStart::SlidingBody { body, axis, anchor, .. } => {
+                    if !(axis.is_finite() && axis.length() > 0.0 && anchor.is_finite()) {
+                        return Err(RopeError::InvalidParameter { name: "start axis/anchor", value: axis.length(), reason: "must be finite, the axis non-zero" });
+                    }
+                    Some(("start body", body))
+                }
+                _ => None,
+            },
+            match &self.end {
+                RopeEnd::Body { body, anchor, .. } => {
+                    if !anchor.is_finite() {
+                        return Err(RopeError::InvalidParameter { name: "end anchor", value: f64::NAN, reason: "not finite" });
+                    }
+                    Some(("end body", body))
+                }
+                _ => None,
+            },
+        ];
+        for (name, body) in bodies.into_iter().flatten() {
+            check(name, body.mass, true)?;
+            let finite = body.inertia.is_finite() && body.position.is_finite() && body.rotation.is_finite() && body.com.is_finite();
+            // A rotational inertia must be symmetric positive semi-definite:
+            // non-negative diagonal at least.
+            let diag = [body.inertia.x_axis.x, body.inertia.y_axis.y, body.inertia.z_axis.z];
+            if !finite || diag.iter().any(|d| *d < 0.0) {
+                return Err(RopeError::InvalidParameter {
+                    name,
+                    value: body.mass,
+                    reason: "inertia, position, rotation and centre of mass must be finite, the inertia's diagonal ≥ 0",
+                });
+            }
+        }
         let n = self.segments;
         let le = self.length / n as f64;
         let start = self.start_point();
