@@ -140,6 +140,19 @@ impl Cable {
         Ok(stats)
     }
 
+    /// Recomputes the acceleration from the equations of motion at the
+    /// current state, loads and drives (the integrator's starting value).
+    /// [`Cable::new`] does this with the loads the model has then: call it
+    /// again after setting loads or drives before the first step, so that
+    /// generalized-α does not start from an acceleration that misses them
+    /// (which would lag the response by about half a step). The kinematics
+    /// are refreshed.
+    pub fn recompute_acceleration(&mut self) -> Result<(), CableError> {
+        self.state.recompute_acceleration(&mut self.model.chain)?;
+        self.refresh();
+        Ok(())
+    }
+
     /// Re-evaluates kinematics and loads at the current state (queries read
     /// them). Called by [`Cable::step`].
     pub fn refresh(&mut self) {

@@ -113,6 +113,10 @@ pub struct CableSim {
     /// Samples of the bodies that move the cable's base or end target,
     /// shared with the cable's motion closures.
     pub(crate) samples: Vec<(Entity, Vec3, Arc<Mutex<BaseSample>>)>,
+    /// A trolley absorbed as the chain's root prismatic link: its entity
+    /// (which holds the rapier `ImpulseJoint` whose motor drives it) and the
+    /// rapier joint coordinate at the chain coordinate 0, m.
+    pub(crate) rail: Option<(Entity, f64)>,
     /// Stopped after a divergence.
     pub failed: bool,
 }

@@ -31,7 +31,15 @@
 //!   the rope itself). Its [`ExternalForce`](bevy_rapier3d::prelude::ExternalForce) is applied in the cable solve.
 //! * A **dynamic body on a prismatic joint** at a cable's start (a trolley on
 //!   its rail) becomes a prismatic link of the chain in the same way; its
-//!   `ExternalForce` along the rail drives it.
+//!   `ExternalForce` along the rail drives it, and so does the joint's rapier
+//!   motor (`PrismaticJointBuilder::motor_velocity`/`motor_position`, read
+//!   every step): a spring–damper `k (x_target − x) + c (v_target − v)` on
+//!   the chain's rail coordinate, implicit in the cable solve (`k`, `c` times
+//!   the trolley's mass for `MotorModel::AccelerationBased`, as rapier
+//!   scales them), or an explicit `max_force` when it would ask for more.
+//! * The carried bodies' rapier `Velocity` at creation becomes the chain's
+//!   initial rates, and before its first step a cable recomputes its
+//!   acceleration with the loads and motors then acting.
 //! * A **fixed or kinematic body** moves the cable end (the cable's base
 //!   follows its pose, velocity and the velocity change over the last step).
 //! * Any **other dynamic body** (one rapier keeps: contacts, joint graphs)

@@ -5,7 +5,7 @@ use super::CableSettings;
 use crate::cable::{BaseMotion, BaseState, BodyInChain, Cable, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeStart};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier3d::rapier::dynamics::{RigidBody as RapierBody, RigidBodyType};
+use bevy_rapier3d::rapier::dynamics::{JointMotor, RigidBody as RapierBody, RigidBodyType};
 use glam::{DMat3, DVec3};
 use std::sync::{Arc, Mutex};
 
@@ -80,6 +80,7 @@ pub(crate) fn init_cables(
         let body = |e: Entity| handles.get(e).ok().and_then(|h| bodies_set.get(h.0));
         let mut carried = Vec::new();
         let mut samples = Vec::new();
+        let mut rail = None;
         // Start.
         let (start, start_point) = match &d.start {
             CableAnchor::Free => {
@@ -101,15 +102,21 @@ pub(crate) fn init_cables(
                     continue;
                 };
                 let sample = sample_body(rb, *anchor);
+                // A prismatic joint to a fixed body: the rail axis (world)
+                // and the rapier joint coordinate now.
                 let slide = joints.get(*be).ok().and_then(|j| match &j.data {
                     TypedJoint::PrismaticJoint(pj) => {
                         let parent = body(j.parent)?;
-                        (parent.body_type() == RigidBodyType::Fixed).then(|| pose_of(parent).1 * pj.local_axis1().as_dvec3())
+                        let ((pp, rp), (pc, rc)) = (pose_of(parent), pose_of(rb));
+                        let axis = rp * pj.local_axis1().as_dvec3();
+                        let gap = pc + rc * pj.local_anchor2().as_dvec3() - pp - rp * pj.local_anchor1().as_dvec3();
+                        (parent.body_type() == RigidBodyType::Fixed).then(|| (axis, gap.dot(axis.normalize())))
                     }
                     _ => None,
                 });
                 match (rb.body_type(), slide) {
-                    (RigidBodyType::Dynamic, Some(axis)) => {
+                    (RigidBodyType::Dynamic, Some((axis, offset))) => {
+                        rail = Some((*be, offset));
                         carried.push((*be, CarriedBody::Lumped(BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO })));
                         (RopeStart::SlidingBody { body: lumped_of(rb), axis: axis.normalize(), anchor: anchor.as_dvec3(), clamp: *clamp }, sample.position)
                     }
@@ -234,7 +241,7 @@ pub(crate) fn init_cables(
                 }
             }
         }
-        commands.entity(entity).insert((CableSim { cable, bodies: carried, samples, failed: false }, CableState::default()));
+        commands.entity(entity).insert((CableSim { cable, bodies: carried, samples, rail, failed: false }, CableState::default()));
     }
 }
 
@@ -256,10 +263,44 @@ pub(crate) fn read_bodies(mut cables: Query<&mut CableSim>, ctx: ReadRapierConte
     }
 }
 
+/// The rapier motor of an absorbed trolley's prismatic joint, as a spring
+/// and damper on the chain's root sub-joint: `F = k (x_target − x) +
+/// c (v_target − v)` (with `AccelerationBased` motors, `k` and `c` times the
+/// trolley's mass, as rapier scales them by the body's mass), implicit in
+/// the cable solve; when the force this asks for now exceeds `max_force`,
+/// an explicit force of `max_force` toward the target instead. `offset` is
+/// the rapier joint coordinate at chain coordinate 0. Without a motor the
+/// root sub-joint is free.
+fn rail_motor(cable: &mut Cable, motor: Option<JointMotor>, offset: f64) {
+    let (x, v) = (offset + cable.state.q[0], cable.state.v[0]);
+    let ch = &mut cable.model.chain;
+    let j = &mut ch.joints[0];
+    let Some(m) = motor.filter(|m| m.stiffness != 0.0 || m.damping != 0.0) else {
+        (j.stiffness, j.damping, j.rest) = (0.0, 0.0, 0.0);
+        ch.joint_forces[0] = 0.0;
+        return;
+    };
+    let scale = match m.model {
+        MotorModel::AccelerationBased => j.link.map_or(0.0, |l| l.mass),
+        MotorModel::ForceBased => 1.0,
+    };
+    let (k, c) = (m.stiffness as f64 * scale, m.damping as f64 * scale);
+    let (target_x, target_v, max_force) = (m.target_pos as f64, m.target_vel as f64, m.max_force as f64);
+    let needed = k * (target_x - x) + c * (target_v - v);
+    if needed.abs() <= max_force {
+        (j.stiffness, j.damping, j.rest) = (k, c, target_x - offset);
+        ch.joint_forces[0] = c * target_v;
+    } else {
+        (j.stiffness, j.damping, j.rest) = (0.0, 0.0, 0.0);
+        ch.joint_forces[0] = max_force.copysign(needed);
+    }
+}
+
 /// Advances every cable by the fixed step.
 pub(crate) fn step_cables(
     mut cables: Query<(Entity, &mut CableSim)>,
     forces: Query<&ExternalForce>,
+    joints: Query<&ImpulseJoint>,
     settings: Res<CableSettings>,
     time: Res<Time>,
     mut diverged: MessageWriter<CableDiverged>,
@@ -280,6 +321,22 @@ pub(crate) fn step_cables(
             if let (CarriedBody::Lumped(b), Ok(f)) = (c, forces.get(*be)) {
                 let lm = sim.cable.model.chain.joints[b.link].link.map_or(DVec3::ZERO, |m| m.com);
                 sim.cable.model.chain.loads.push(LinkLoad { link: b.link, force: f.force.as_dvec3(), local_point: lm, moment: f.torque.as_dvec3() });
+            }
+        }
+        if let Some((trolley, offset)) = sim.rail {
+            let motor = joints.get(trolley).ok().and_then(|j| match &j.data {
+                TypedJoint::PrismaticJoint(pj) => pj.motor().copied(),
+                _ => None,
+            });
+            rail_motor(&mut sim.cable, motor, offset);
+        }
+        // Before the first step: start from the acceleration these loads and
+        // drives give (not the force-free one of the cable's creation).
+        if sim.cable.steps == 0 {
+            if let Err(e) = sim.cable.recompute_acceleration() {
+                sim.failed = true;
+                diverged.write(CableDiverged { entity, time: sim.cable.time(), message: e.to_string() });
+                continue;
             }
         }
         for _ in 0..n {
