@@ -38,9 +38,11 @@ use crate::cable::{
     RopeSection, RopeStart,
 };
 use crate::integrate::{Scheme, SchemeParams, Substeps};
-use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, Location, ProbeTarget, Quantity, Scenario, Shape};
+use super::rapier::RapierWorld;
+use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, JointKind, Location, ProbeTarget, Quantity, Scenario, Shape};
 use glam::{DMat3, DQuat, DVec3, EulerRot};
-use std::sync::Arc;
+use std::collections::HashSet;
+use std::sync::{Arc, Mutex};
 use thiserror::Error;
 
 /// Why a scenario cannot be run or stopped.
@@ -55,6 +57,16 @@ pub enum SimError {
         location: Location,
         /// What.
         what: String,
+    },
+    /// The scenario is inconsistent in a way the parser does not check.
+    #[error("{file}:{location}: {message}")]
+    Invalid {
+        /// Scenario file.
+        file: String,
+        /// Where.
+        location: Location,
+        /// What is wrong.
+        message: String,
     },
     /// A cable could not be built.
     #[error("{file}:{location}: cable `{cable}`: {source}")]
@@ -98,6 +110,14 @@ pub enum SimError {
         /// What went wrong.
         source: Box<CableError>,
     },
+    /// A rapier body's state became non-finite.
+    #[error("body `{body}` diverged at t = {time} s (non-finite rapier state)")]
+    BodyDiverged {
+        /// Body name.
+        body: String,
+        /// Simulation time at the start of the failing frame, s.
+        time: f64,
+    },
     /// A cable diverged or its step failed.
     #[error("cable `{cable}` failed at t = {time} s: {source}")]
     Diverged {
@@ -140,6 +160,123 @@ pub fn shape_inertia(shape: &Shape, mass: f64) -> DMat3 {
     DMat3::from_diagonal(d)
 }
 
+/// Pose and velocity of a rapier body's attachment point at the start of
+/// a frame, shared with the cable's base motion or end-spring target.
+#[derive(Debug, Clone, Copy, Default)]
+struct Sample {
+    /// Frame start time, s.
+    t0: f64,
+    position: DVec3,
+    rotation: DMat3,
+    velocity: DVec3,
+    angular_velocity: DVec3,
+    /// Finite difference of the point velocity over the last frame.
+    acceleration: DVec3,
+    /// Centre of mass of the body (its origin), m.
+    com: DVec3,
+}
+
+/// Sample of the point `anchor` (body frame) of rapier body `h`.
+fn sample(rw: &RapierWorld, h: rapier3d::prelude::RigidBodyHandle, anchor: DVec3) -> Sample {
+    let (p, q) = rw.pose_of(h);
+    let r = DMat3::from_quat(q);
+    let a = r * anchor;
+    let (v, w) = rw.velocity_of(h);
+    Sample { t0: 0.0, position: p + a, rotation: r, velocity: v + w.cross(a), angular_velocity: w, acceleration: DVec3::ZERO, com: p }
+}
+
+/// Force (N) and moment about `com` (N·m) that a cable puts on the body
+/// at its start (`start`: the chain's base load) or end (minus the end
+/// anchor spring's force on the chain, at the spring's target point) after
+/// a step ending at `t`.
+fn reaction(cable: &Cable, start: bool, com: DVec3, t: f64) -> (DVec3, DVec3) {
+    let ch = &cable.model.chain;
+    if start {
+        let fc = ch.base_load();
+        (fc.bot, fc.top - (com - ch.origin).cross(fc.bot))
+    } else {
+        let Some(an) = ch.anchors.first() else { return (DVec3::ZERO, DVec3::ZERO) };
+        let p = ch.link_point(an.link, an.local_point);
+        let pv = ch.link_point_velocity(an.link, an.local_point);
+        let (target, target_v) = (an.target)(t);
+        let on_chain = -(p - target) * an.stiffness - (pv - target_v) * an.damping;
+        (-on_chain, (target - com).cross(-on_chain))
+    }
+}
+
+/// Dynamic bodies that cables absorb as links of their chains: a body at
+/// the `end` of exactly one cable and of no other cable end, that no joint
+/// holds (hook, payload); a body at the `start` of exactly one cable and of
+/// no other cable end, held only by one `prismatic` joint to the world
+/// (trolley).
+fn absorbed_bodies(sc: &Scenario) -> HashSet<&str> {
+    let mut out = HashSet::new();
+    for b in sc.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
+        let on = |e: &CableEnd| matches!(e, CableEnd::Body { body, .. } if *body == b.name);
+        let starts = sc.cables.iter().filter(|c| on(&c.start)).count();
+        let ends = sc.cables.iter().filter(|c| on(&c.end)).count();
+        let joints: Vec<_> = sc.joints.iter().filter(|j| j.body1 == b.name || j.body2 == b.name).collect();
+        let absorbed = match (starts, ends, joints.as_slice()) {
+            (0, 1, []) => true,
+            (1, 0, [j]) => j.kind == JointKind::Prismatic && (j.body1 == "world" || j.body2 == "world"),
+            _ => false,
+        };
+        if absorbed {
+            out.insert(b.name.as_str());
+        }
+    }
+    out
+}
+
+fn joint_kind_name(k: JointKind) -> &'static str {
+    match k {
+        JointKind::Fixed => "fixed",
+        JointKind::Revolute => "revolute",
+        JointKind::Prismatic => "prismatic",
+        JointKind::Spherical => "spherical",
+    }
+}
+
+fn fmt_point(p: DVec3) -> String {
+    format!("[{:.4}, {:.4}, {:.4}] m", p.x, p.y, p.z)
+}
+
+/// A base motion that follows a shared sample, extrapolated with constant
+/// acceleration over the frame (as the Bevy plugin's `follow`).
+fn follow(sample: Arc<Mutex<Sample>>) -> BaseMotion {
+    BaseMotion::Prescribed(Arc::new(move |t| {
+        let s = *sample.lock().unwrap_or_else(|e| e.into_inner());
+        let dt = t - s.t0;
+        BaseState {
+            rotation: s.rotation,
+            position: s.position + s.velocity * dt + 0.5 * s.acceleration * dt * dt,
+            angular_velocity: s.angular_velocity,
+            velocity: s.velocity + s.acceleration * dt,
+            angular_acceleration: DVec3::ZERO,
+            acceleration: s.acceleration,
+        }
+    }))
+}
+
+/// How a cable end is coupled to a dynamic body that rapier keeps
+/// (explicit exchange, one frame lag).
+#[derive(Debug)]
+struct Coupling {
+    /// Index into the rapier bodies.
+    body: usize,
+    /// Anchor in the body frame, m.
+    anchor: DVec3,
+    /// `true`: the cable's start (base follows the body, the body gets
+    /// the base load); `false`: its end (anchor spring target follows the
+    /// body point, the body gets minus the spring force).
+    start: bool,
+    /// The shared sample the chain reads.
+    sample: Arc<Mutex<Sample>>,
+    /// Impulse (N·s) and angular impulse about the body's centre (N·m·s)
+    /// collected over the frame's cable sub-steps.
+    impulse: (DVec3, DVec3),
+}
+
 /// One simulated cable and the scenario bodies it carries.
 #[derive(Debug)]
 struct SimCable {
@@ -149,20 +286,27 @@ struct SimCable {
     bodies: Vec<(String, BodyInChain)>,
     /// Prismatic joint of the start body (joint name, drive).
     slide: Option<(String, Option<Drive>)>,
+    /// Ends on dynamic rapier bodies.
+    couplings: Vec<Coupling>,
 }
 
-/// The cables of a scenario, stepped together (see the module docs).
+/// The cables, rapier bodies and joints of a scenario, stepped together
+/// (see the module docs).
 #[derive(Debug)]
 pub struct World {
     /// The scenario.
     pub scenario: Scenario,
     cables: Vec<SimCable>,
+    rapier: RapierWorld,
     /// Simulation time, s.
     pub time: f64,
     /// Frames stepped.
     pub steps: u64,
     /// Cable sub-steps per frame.
     pub substeps: u32,
+    /// Notes about the run that are not errors: explicit couplings beyond
+    /// their estimated stability limit (see the module docs).
+    pub warnings: Vec<String>,
 }
 
 impl World {
@@ -187,28 +331,58 @@ impl World {
         let ic = &sim.integrator;
         let params = SchemeParams { beta: ic.beta, gamma: ic.gamma, theta: ic.theta, alpha: ic.alpha, rho_inf: ic.rho_inf, w: ic.w };
         let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
-        let mut cables = Vec::new();
-        for c in &scenario.cables {
-            cables.push(build_cable(&scenario, c, &scheme, &file)?);
-        }
-        // Every dynamic body must be carried by exactly one cable.
-        for b in scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
-            let holders = cables.iter().filter(|c| c.bodies.iter().any(|(n, _)| *n == b.name)).count();
-            if holders != 1 {
+        // Dynamic bodies that become links of a cable's chain; every other
+        // body is a rapier body.
+        let absorbed = absorbed_bodies(&scenario);
+        let rail = |j: &scenario::Joint| {
+            j.kind == JointKind::Prismatic && [&j.body1, &j.body2].iter().any(|n| absorbed.contains(n.as_str()))
+        };
+        for p in &scenario.probes {
+            let ProbeTarget::Joint(name) = &p.target else { continue };
+            let Some(j) = scenario.joints.iter().find(|j| j.name == *name) else { continue };
+            if rail(j) {
+                continue;
+            }
+            if matches!(p.quantity, Quantity::Position | Quantity::Velocity) && !matches!(j.kind, JointKind::Revolute | JointKind::Prismatic) {
+                return Err(SimError::Invalid {
+                    file: file.clone(),
+                    location: p.location,
+                    message: format!("probe `{}`: joint `{name}` is {}; `{}` is only defined for revolute and prismatic joints", p.name, joint_kind_name(j.kind), p.quantity.name()),
+                });
+            }
+            if p.quantity == Quantity::Force && j.drive.is_none() {
                 return Err(unsupported(
-                    b.location,
-                    format!("dynamic body `{}` held by {holders} cables (this runner simulates dynamic bodies carried by exactly one cable)", b.name),
+                    p.location,
+                    format!("probe `{}`: the `force` of joint `{name}`, which has no `drive` (the reaction force of a rapier joint; a driven joint reports its drive force)", p.name),
                 ));
             }
         }
-        for j in &scenario.joints {
-            let carried = cables.iter().any(|c| c.slide.as_ref().is_some_and(|(n, _)| *n == j.name));
-            let static_bodies = [&j.body1, &j.body2].iter().all(|n| {
-                *n == "world" || scenario.body(n).is_some_and(|b| b.kind != BodyKind::Dynamic)
-            });
-            if !carried && !static_bodies {
-                return Err(unsupported(j.location, format!("joint `{}` between dynamic bodies", j.name)));
+        let mut rapier = RapierWorld::new(sim.gravity, sim.dt);
+        for b in scenario.bodies.iter().filter(|b| !absorbed.contains(b.name.as_str())) {
+            rapier.add_body(b);
+        }
+        for j in scenario.joints.iter().filter(|j| !rail(j)) {
+            let point = |body: &str, anchor: DVec3| scenario.body(body).map_or(anchor, |b| b.world_point(anchor));
+            let (p1, p2) = (point(&j.body1, j.anchor1), point(&j.body2, j.anchor2));
+            if p1.distance(p2) > 1e-3 {
+                return Err(SimError::Invalid {
+                    file: file.clone(),
+                    location: j.location,
+                    message: format!(
+                        "joint `{}`: `anchor1` is at {} in the world but `anchor2` at {}; a joint's two anchors must be the same point at t = 0 (within 1 mm)",
+                        j.name,
+                        fmt_point(p1),
+                        fmt_point(p2)
+                    ),
+                });
             }
+            let handle = |n: &str| rapier.body(n).map(|b| b.handle);
+            let (h1, h2) = (handle(&j.body1), handle(&j.body2));
+            rapier.add_joint(j, h1, h2, sim.dt);
+        }
+        let mut cables = Vec::new();
+        for c in &scenario.cables {
+            cables.push(build_cable(&scenario, c, &scheme, &file, &absorbed, &rapier)?);
         }
         if sim.statics {
             // Start from the static equilibrium (gravity, loads, held ends).
@@ -251,16 +425,56 @@ impl World {
                 c.cable.integrator.substeps = Substeps::Auto;
             }
         }
-        Ok(World { scenario, cables, time: 0.0, steps: 0, substeps })
+        // Explicit couplings: estimated stability k·h²/m (k the stiffness of
+        // the element next to the body, m the body's mass).
+        let mut warnings = Vec::new();
+        for c in &cables {
+            let le = c.cable.model.layout.element_length;
+            let k = c.cable.model.section.ea / le;
+            for cp in &c.couplings {
+                let b = &rapier.bodies[cp.body];
+                let ratio = k * sim.dt * sim.dt / b.mass;
+                if ratio > 1.0 {
+                    warnings.push(format!(
+                        "cable `{}` {} on body `{}` is coupled explicitly with k·h²/m = {ratio:.3e} > 1 (k = EA/L_e = {k:.4e} N/m, h = {} s, m = {} kg): it may be unstable unless joints hold the body; see docs/scenario.md \"Explicit coupling\"",
+                        c.name,
+                        if cp.start { "start" } else { "end" },
+                        b.name,
+                        sim.dt,
+                        b.mass
+                    ));
+                }
+            }
+        }
+        Ok(World { scenario, cables, rapier, time: 0.0, steps: 0, substeps, warnings })
     }
 
-    /// Advances every cable by one frame `dt` (in `substeps` sub-steps).
+    /// Advances the world by one frame `dt`: samples the rapier bodies the
+    /// cables hang on, steps every cable (in `substeps` sub-steps, with its
+    /// drives), applies the cables' reactions to those bodies, then steps
+    /// rapier (see the module docs).
     pub fn step(&mut self) -> Result<(), SimError> {
         let dt = self.scenario.simulation.dt;
         let h = dt / self.substeps as f64;
+        let t0 = self.time;
+        // 1. Sample the rapier bodies the cables are coupled to.
+        for c in &mut self.cables {
+            for cp in &mut c.couplings {
+                let rb = &self.rapier.bodies[cp.body];
+                let mut s = sample(&self.rapier, rb.handle, cp.anchor);
+                s.t0 = t0;
+                let mut guard = cp.sample.lock().unwrap_or_else(|e| e.into_inner());
+                if self.steps > 0 {
+                    s.acceleration = (s.velocity - guard.velocity) / dt;
+                }
+                *guard = s;
+                cp.impulse = (DVec3::ZERO, DVec3::ZERO);
+            }
+        }
+        // 2. Step every cable; collect the reactions over its sub-steps.
         for c in &mut self.cables {
             for k in 0..self.substeps {
-                let t = self.time + k as f64 * h;
+                let t = t0 + k as f64 * h;
                 match &c.slide {
                     Some((_, Some(Drive::Force { force }))) => {
                         // Drive force at the sub-step's midpoint.
@@ -272,11 +486,41 @@ impl World {
                     _ => {}
                 }
                 c.cable.step(h).map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source: Box::new(source) })?;
+                for cp in &mut c.couplings {
+                    let com = cp.sample.lock().unwrap_or_else(|e| e.into_inner()).com;
+                    let (f, m) = reaction(&c.cable, cp.start, com, t + h);
+                    cp.impulse.0 += f * h;
+                    cp.impulse.1 += m * h;
+                }
             }
         }
+        // 3. Apply the reactions to the rapier bodies.
+        for c in &self.cables {
+            for cp in &c.couplings {
+                let rb = &mut self.rapier.pw.bodies[self.rapier.bodies[cp.body].handle];
+                rb.apply_impulse(cp.impulse.0.as_vec3(), true);
+                rb.apply_torque_impulse(cp.impulse.1.as_vec3(), true);
+            }
+        }
+        // 4. Step rapier (kinematic motions, joint drives).
+        self.rapier.prepare_step(t0, dt);
+        self.rapier.step().map_err(|body| SimError::BodyDiverged { body, time: t0 })?;
         self.steps += 1;
         self.time = self.steps as f64 * dt;
         Ok(())
+    }
+
+    /// The cables' reactions on the dynamic rapier bodies they are coupled
+    /// to, averaged over the last frame: (cable, body, `true` for the
+    /// cable's start, force N, moment about the body's centre N·m).
+    pub fn coupling_reactions(&self) -> Vec<(&str, &str, bool, DVec3, DVec3)> {
+        let dt = self.scenario.simulation.dt;
+        self.cables
+            .iter()
+            .flat_map(|c| {
+                c.couplings.iter().map(move |cp| (c.name.as_str(), self.rapier.bodies[cp.body].name.as_str(), cp.start, cp.impulse.0 / dt, cp.impulse.1 / dt))
+            })
+            .collect()
     }
 
     /// The cable named `name`.
@@ -308,6 +552,11 @@ impl World {
                 return c.cable.model.body_state(b);
             }
         }
+        if let Some(b) = self.rapier.body(name) {
+            let (p, q) = self.rapier.pose_of(b.handle);
+            let (v, w) = self.rapier.velocity_of(b.handle);
+            return (p, DMat3::from_quat(q), v, w);
+        }
         let b = self.scenario.body(name).expect("probe targets are validated");
         let t = self.time;
         let (v, w) = b.motion.as_ref().map_or((DVec3::ZERO, DVec3::ZERO), |m| (m.velocity_at(t), m.angular_velocity_at(t)));
@@ -317,10 +566,12 @@ impl World {
     fn probe(&self, p: &scenario::Probe) -> Probe {
         match &p.target {
             ProbeTarget::System => {
+                // Cables (with the bodies they carry) + rapier's dynamic bodies.
                 let e = |f: fn(&Cable) -> f64| self.cables.iter().map(|c| f(&c.cable)).sum::<f64>();
+                let ke = self.rapier.kinetic_energy();
                 match p.quantity {
-                    Quantity::KineticEnergy => Probe::Scalar(e(Cable::kinetic_energy)),
-                    _ => Probe::Scalar(e(Cable::energy)),
+                    Quantity::KineticEnergy => Probe::Scalar(e(Cable::kinetic_energy) + ke),
+                    _ => Probe::Scalar(e(Cable::energy) + ke + self.rapier.gravity_energy(self.scenario.simulation.gravity)),
                 }
             }
             ProbeTarget::Body(name) => {
@@ -356,8 +607,19 @@ impl World {
                         let axis = ch.link_rotation(0) * ch.joints[0].axis;
                         Probe::Vector(axis * (ch.joint_forces[0] - ch.joints[0].damping * c.cable.state.v[0]))
                     }
-                    (None, Quantity::Force) => Probe::Vector(DVec3::NAN),
-                    (None, _) => Probe::Scalar(0.0),
+                    (None, q) => match self.rapier.joints.iter().find(|j| j.name == *name) {
+                        // Rapier joint: revolute in degrees, prismatic in m.
+                        Some(j) => {
+                            let deg = if j.kind == JointKind::Revolute { 180.0 / std::f64::consts::PI } else { 1.0 };
+                            match q {
+                                Quantity::Position => Probe::Scalar(self.rapier.joint_position(j) * deg),
+                                Quantity::Velocity => Probe::Scalar(self.rapier.joint_velocity(j) * deg),
+                                // The drive force / torque (non-driven joints are refused).
+                                _ => Probe::Vector(self.rapier.joint_axis(j) * j.drive_force),
+                            }
+                        }
+                        None => Probe::Scalar(f64::NAN),
+                    },
                 }
             }
             ProbeTarget::Winch(_) => Probe::Scalar(f64::NAN),
@@ -435,7 +697,7 @@ fn body_base(b: &scenario::Body, anchor: DVec3) -> BaseMotion {
     }
 }
 
-fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) -> Result<SimCable, SimError> {
+fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str, absorbed: &HashSet<&str>, rapier: &RapierWorld) -> Result<SimCable, SimError> {
     let unsupported = |what: String| SimError::Unsupported { file: file.to_string(), location: c.location, what };
     let section = RopeSection {
         linear_density: c.linear_density,
@@ -455,6 +717,14 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
     }
     let mut bodies = Vec::new();
     let mut slide = None;
+    let mut couplings = Vec::new();
+    // A coupling to rapier body `name` (a dynamic body no cable absorbs).
+    let mut couple = |name: &str, anchor: DVec3, start: bool| {
+        let body = rapier.bodies.iter().position(|b| b.name == name).expect("non-absorbed bodies are rapier bodies");
+        let shared = Arc::new(Mutex::new(sample(rapier, rapier.bodies[body].handle, anchor)));
+        couplings.push(Coupling { body, anchor, start, sample: shared.clone(), impulse: (DVec3::ZERO, DVec3::ZERO) });
+        follow(shared)
+    };
     builder = match &c.start {
         CableEnd::Free => builder.start(RopeStart::Free),
         CableEnd::World { point, clamp } => {
@@ -463,17 +733,12 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
         }
         CableEnd::Body { body, anchor, clamp } => {
             let b = sc.body(body).expect("validated");
-            if b.kind == BodyKind::Dynamic {
-                let joint = sc.joints.iter().find(|j| {
-                    j.kind == scenario::JointKind::Prismatic
-                        && ((j.body1 == "world" && j.body2 == *body) || (j.body2 == "world" && j.body1 == *body))
-                });
-                let Some(j) = joint else {
-                    return Err(unsupported(format!(
-                        "cable `{}` starting on dynamic body `{body}` that no prismatic joint holds to the world",
-                        c.name
-                    )));
-                };
+            if b.kind == BodyKind::Dynamic && !absorbed.contains(body.as_str()) {
+                // Explicit base: follows the rapier body, which gets the base load.
+                let base = couple(body, *anchor, true);
+                builder.start(if *clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) })
+            } else if b.kind == BodyKind::Dynamic {
+                let j = sc.joints.iter().find(|j| j.body1 == *body || j.body2 == *body).expect("an absorbed start body has its rail");
                 let axis = j.axis.unwrap_or(DVec3::X);
                 slide = Some((j.name.clone(), j.drive.clone()));
                 bodies.push((body.clone(), BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
@@ -493,10 +758,22 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
         }
         CableEnd::Body { body, anchor, clamp } => {
             let b = sc.body(body).expect("validated");
-            if b.kind == BodyKind::Dynamic {
-                if sc.joints.iter().any(|j| j.body1 == *body || j.body2 == *body) {
-                    return Err(unsupported(format!("cable `{}` ending on body `{body}` that a joint also holds", c.name)));
+            if b.kind == BodyKind::Dynamic && !absorbed.contains(body.as_str()) {
+                // Explicit end: the anchor spring's target follows the rapier
+                // body's point; the body gets minus the spring force.
+                if *clamp {
+                    return Err(unsupported(format!(
+                        "cable `{}` with its `end` clamped to body `{body}`, which rapier keeps (a dynamic body held by joints or other cables: the end spring's orientation hold has a fixed target; clamp the `start` instead, or leave the end pinned)",
+                        c.name
+                    )));
                 }
+                let BaseMotion::Prescribed(f) = couple(body, *anchor, false) else { unreachable!("follow() is prescribed") };
+                let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |t| {
+                    let s = f(t);
+                    (s.position, s.velocity)
+                });
+                builder.end(RopeEnd::Pinned(target))
+            } else if b.kind == BodyKind::Dynamic {
                 bodies.push((body.clone(), BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
                 builder.end(RopeEnd::Body { body: lumped(b), anchor: *anchor, clamp: *clamp })
             } else {
@@ -525,5 +802,5 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
     for l in &c.loads {
         cable.add_point_load_and_moment(l.s, l.force, l.moment);
     }
-    Ok(SimCable { name: c.name.clone(), cable, bodies, slide })
+    Ok(SimCable { name: c.name.clone(), cable, bodies, slide, couplings })
 }
