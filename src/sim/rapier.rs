@@ -296,7 +296,9 @@ impl RapierWorld {
         for b in &self.bodies {
             let rb = &self.pw.bodies[b.handle];
             let p = rb.position();
-            if !(p.translation.is_finite() && p.rotation.is_finite() && rb.linvel().is_finite() && rb.angvel().is_finite()) || !rb.is_enabled() {
+            let finite = p.translation.is_finite() && p.rotation.is_finite() && rb.linvel().is_finite() && rb.angvel().is_finite();
+            // Rapier disables (quarantines) bodies whose state became non-finite.
+            if !finite || !rb.is_enabled() {
                 return Err(b.name.clone());
             }
         }

@@ -1,37 +1,108 @@
-//! [`World`]: the cables of a scenario, stepped together.
+//! [`World`]: the cables, rapier bodies and rapier joints of a scenario,
+//! stepped together.
 //!
 //! ## What maps to what
 //! * A cable end on a `fixed` body, a `kinematic` body (with its `motion`)
 //!   or a world point is the base (start) or an implicit anchor spring (end)
 //!   of that cable's chain.
-//! * A `dynamic` body at a cable's end that no joint and no other cable
-//!   holds (hook, payload) is a lumped link of the chain: a ball joint at
-//!   the anchor (or rigidly clamped), with its mass and full rotary inertia.
-//! * A `dynamic` body at a cable's start that one `prismatic` joint holds to
-//!   the world (a trolley on its rail) is a link of the chain too, behind a
-//!   prismatic sub-joint; a `drive` on that joint acts on it (a force table,
-//!   or a velocity motor: an implicit damper `c (v_target − v)` with
-//!   `c = m/(2 dt)`, saturating at `max_force`).
-//!
-//! * A free start floats (the path gives its initial shape).
-//! * A kinematic body with a `spin` motion turns the base of a cable that
-//!   starts on it (orientation, the anchor point's velocity and
-//!   acceleration, angular velocity and acceleration); a cable end on it
+//! * **Absorbed bodies.** A `dynamic` body at the `end` of exactly one
+//!   cable, at no other cable end and in no joint (hook, payload) is a lumped
+//!   link of the chain: a ball joint at the anchor (or rigidly clamped),
+//!   with its mass and full rotary inertia. A `dynamic` body at the `start`
+//!   of exactly one cable, at no other cable end, whose only joint is one
+//!   `prismatic` joint to the world (a trolley on its rail) is a link of the
+//!   chain too, behind a prismatic sub-joint; a `drive` on that joint acts
+//!   on it (a force table, or a velocity motor: an implicit damper
+//!   `c (v_target − v)` with `c = m/(2 dt)`, saturating at `max_force`).
+//!   Absorbed bodies are **not** rapier bodies (no collider: rapier bodies
+//!   do not touch them), and their rails are not rapier joints.
+//! * **Rapier bodies.** Every other body is a rapier3d body in a plain
+//!   [`rapier3d::prelude::PhysicsWorld`] (no Bevy): dynamic, fixed or
+//!   kinematic-position-based, with its one collider (ball, cuboid, capsule
+//!   or cylinder along local y, the body's `friction`), the mass `mass` with
+//!   the shape's uniform-solid inertia (rapier's collider mass properties,
+//!   equal to [`shape_inertia`]), its initial `linear_velocity` /
+//!   `angular_velocity`, `[simulation] gravity`, sleeping off, gyroscopic
+//!   torques on. A kinematic body with a `motion` is moved to the motion's
+//!   pose at the end of each frame (`set_next_kinematic_position`).
+//! * **Rapier joints.** Every joint that is not an absorbed trolley's rail
+//!   is a rapier impulse joint (`fixed`, `revolute`, `prismatic`,
+//!   `spherical`) between the two bodies (`world`: a fixed ground body at
+//!   the origin), at `anchor1`/`anchor2` (which must be the same world point
+//!   at t = 0 within 1 mm), about/along `axis` (body1 frame). The joint
+//!   frames coincide at t = 0, so the joint coordinate (revolute angle,
+//!   prismatic slide) is 0 at t = 0 and `limits` are measured from there.
+//!   Contacts between the two jointed bodies are off. A `drive` with a
+//!   `force` table applies F(t + dt/2)·dt per frame along the axis (equal
+//!   and opposite at the two anchor points), or a torque about it (revolute);
+//!   a `velocity` drive is rapier's joint motor (acceleration-based damping
+//!   1/dt: the velocity error halves every frame) with `max_force`.
+//! * **Cables on dynamic rapier bodies (explicit coupling)**, as the Bevy
+//!   plugin's `CarriedBody::Explicit` / `ExplicitEnd`: a cable `start` on a
+//!   dynamic rapier body is the chain's base, following the body's anchor
+//!   point sampled at the start of the frame (pose, velocity, angular
+//!   velocity, and the velocity's finite difference over the last frame as
+//!   acceleration, extrapolated over the frame); the body gets the chain's
+//!   base load (the spatial force about the chain origin, moved to the body
+//!   centre). A pinned cable `end` on a dynamic rapier body is the implicit
+//!   end anchor spring whose target follows the sampled body point; the
+//!   body gets minus the spring's force at that point. The reactions are
+//!   averaged over the frame's cable sub-steps and applied as impulses.
+//!   **Stability:** the exchange lags one frame, so it is an explicit
+//!   scheme: it is stable roughly when k·h²/m ≲ 1, with k the coupling
+//!   stiffness (about EA/L_e of the element next to the body), h the frame
+//!   `dt` and m the body's effective mass at the anchor; the rope mass that
+//!   follows the body rigidly should also be well below the body's. Joints
+//!   that hold the body (a `fixed` joint to the world) raise its effective
+//!   mass and keep it stable beyond that. [`World::new`] puts a note in
+//!   [`World::warnings`] for every coupling with EA·h²/(L_e·m) > 1.
+//! * The other cable features: a free start floats (the path gives its
+//!   initial shape). A kinematic body with a `spin` motion turns the base
+//!   of a cable that starts on it (orientation, the anchor point's velocity
+//!   and acceleration, angular velocity and acceleration); a cable end on it
 //!   is an anchor spring to the turning point (a clamped end is refused).
-//! * A cable's `loads` are constant point loads on its chain
+//!   A cable's `loads` are constant point loads on its chain
 //!   ([`Cable::add_point_load_and_moment`]); `stress_free` maps to
 //!   [`RopeBuilder::stress_free_shape`]; `[simulation] statics = true` puts
-//!   every cable into its static equilibrium before t = 0
-//!   ([`Cable::solve_static`], [`STATIC_TOLERANCE`],
+//!   every cable into its static equilibrium before t = 0 (rapier bodies
+//!   held where they are; [`Cable::solve_static`], [`STATIC_TOLERANCE`],
 //!   [`STATIC_MAX_ITERATIONS`]), or fails with [`SimError::Static`].
-//! * Initial `linear_velocity` / `angular_velocity` of carried bodies set
+//!   Initial `linear_velocity` / `angular_velocity` of absorbed bodies set
 //!   the chain's rates ([`Cable::set_link_velocities`], after the static
 //!   start), or fail with [`SimError::InitialVelocity`].
 //!
-//! Anything else (a dynamic body held by several cables or joints, a cable
-//! starting on a free dynamic body, winches, contact
-//! probes, wind and water) is reported as not yet supported, with the file
-//! position, rather than simulated wrongly.
+//! ## Frame order (deterministic)
+//! [`World::step`] advances one frame `dt`:
+//! 1. sample the dynamic rapier bodies that cables hang on (anchor point
+//!    pose, velocity, acceleration by finite difference);
+//! 2. step every cable over the frame in `substeps` sub-steps, with its
+//!    trolley drive, collecting its reactions on those bodies;
+//! 3. apply the reactions to the rapier bodies as impulses;
+//! 4. move kinematic bodies to their motion at t + dt, apply joint force
+//!    drives, set joint motor targets (at t + dt), and step rapier by `dt`
+//!    (rapier sub-steps internally: `num_solver_iterations` = 4 sub-steps
+//!    of symplectic Euler). A non-finite rapier body fails the frame with
+//!    [`SimError::BodyDiverged`].
+//!
+//! ## Probes
+//! Probes of rapier bodies read rapier (origin = centre of mass). Joint
+//! probes of rapier joints: `position` is the revolute angle (deg,
+//! unwrapped, 0 at t = 0) or the prismatic slide (anchor2 − anchor1)·axis
+//! (m); `velocity` its rate; `force` is the drive's force (N) or torque
+//! (N·m) along/about the world axis (velocity motors: rapier's motor
+//! impulse over its last sub-step). The reaction force of an undriven
+//! rapier joint is not reported yet: a `force` probe on one is refused.
+//! `system` energies add the rapier dynamic bodies' kinetic energy
+//! (translation + rotation) and gravitational energy −m g·x to the cables'.
+//!
+//! ## Refused
+//! Anything this runner would simulate wrongly is reported with the file
+//! position (exit status 2): winches, wind and water, `contact_force`
+//! probes, winch probes, a cable `end` clamped to a spinning body or to a
+//! dynamic rapier body (the end spring's orientation hold has a fixed
+//! target), a `force` probe on an undriven rapier joint, and joints whose
+//! anchors are not the same point at t = 0. Cables do not touch colliders
+//! yet (contact is a later issue).
 
 use crate::cable::{
     BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError,
@@ -228,15 +299,6 @@ fn absorbed_bodies(sc: &Scenario) -> HashSet<&str> {
     out
 }
 
-fn joint_kind_name(k: JointKind) -> &'static str {
-    match k {
-        JointKind::Fixed => "fixed",
-        JointKind::Revolute => "revolute",
-        JointKind::Prismatic => "prismatic",
-        JointKind::Spherical => "spherical",
-    }
-}
-
 fn fmt_point(p: DVec3) -> String {
     format!("[{:.4}, {:.4}, {:.4}] m", p.x, p.y, p.z)
 }
@@ -342,13 +404,6 @@ impl World {
             let Some(j) = scenario.joints.iter().find(|j| j.name == *name) else { continue };
             if rail(j) {
                 continue;
-            }
-            if matches!(p.quantity, Quantity::Position | Quantity::Velocity) && !matches!(j.kind, JointKind::Revolute | JointKind::Prismatic) {
-                return Err(SimError::Invalid {
-                    file: file.clone(),
-                    location: p.location,
-                    message: format!("probe `{}`: joint `{name}` is {}; `{}` is only defined for revolute and prismatic joints", p.name, joint_kind_name(j.kind), p.quantity.name()),
-                });
             }
             if p.quantity == Quantity::Force && j.drive.is_none() {
                 return Err(unsupported(
