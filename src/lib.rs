@@ -27,6 +27,7 @@ pub mod cable;
 pub mod integrate;
 pub mod output;
 pub mod scenario;
+#[cfg(feature = "rapier")]
 pub mod sim;
 #[cfg(feature = "app")]
 pub mod plugin;

@@ -948,3 +948,150 @@ fn spin_motion_parses_in_radians_with_a_unit_axis() {
     assert!(b.rotation_at(2.0).dot(DQuat::from_rotation_y(half_pi)).abs() > 1.0 - 1e-14);
     let _ = EulerRot::XYZ;
 }
+
+/// What `sim::World` (rapier bodies and joints) still refuses, with the
+/// file position.
+#[cfg(feature = "rapier")]
+mod world_refusals {
+    use bevy_rapier_cable::scenario::parse;
+    use bevy_rapier_cable::sim::{SimError, World};
+
+    const BEAM: &str = r#"[simulation]
+duration = 1.0
+dt = 0.01
+
+[[body]]
+name = "beam"
+type = "dynamic"
+shape = "cuboid"
+half_extents = [1.0, 0.1, 0.1]
+mass = 500.0
+position = [1.0, 0.0, 0.0]
+
+[[joint]]
+name = "hinge"
+type = "revolute"
+body1 = "world"
+body2 = "beam"
+anchor1 = [0.0, 0.0, 0.0]
+anchor2 = [-1.0, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+"#;
+
+    fn world_err(src: &str) -> (SimError, String) {
+        let sc = parse(src, "bad.toml").unwrap_or_else(|e| panic!("{e}"));
+        let e = World::new(sc).expect_err("World::new should refuse this");
+        let shown = e.to_string();
+        (e, shown)
+    }
+
+    #[test]
+    fn joint_anchors_that_do_not_meet() {
+        let src = BEAM.replace("anchor2 = [-1.0, 0.0, 0.0]", "anchor2 = [-0.9, 0.0, 0.0]");
+        let (e, shown) = world_err(&src);
+        assert!(matches!(e, SimError::Invalid { .. }), "{shown}");
+        assert!(shown.starts_with("bad.toml:13:1:") && shown.contains("must be the same point"), "{shown}");
+    }
+
+    #[test]
+    fn force_probe_on_an_undriven_rapier_joint() {
+        let src = format!("{BEAM}\n[[probe]]\nname = \"f\"\njoint = \"hinge\"\nquantity = \"force\"\n");
+        let (e, shown) = world_err(&src);
+        assert!(matches!(e, SimError::Unsupported { .. }), "{shown}");
+        assert!(shown.starts_with("bad.toml:22:1:") && shown.contains("has no `drive`") && shown.contains("not supported yet"), "{shown}");
+        // With a drive the force probe is the drive's.
+        let driven = src.replace("axis = [0.0, 0.0, 1.0]", "axis = [0.0, 0.0, 1.0]\ndrive = { force = [[0.0, 10.0]] }");
+        World::new(parse(&driven, "ok.toml").unwrap()).unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    #[test]
+    fn clamped_end_on_a_rapier_body() {
+        let cable = "\n[[cable]]\nname = \"stay\"\nlength = 3.0\nsegments = 4\ndiameter = 0.02\nlinear_density = 1.0\nea = 1e6\nei = 1.0\ngj = 1.0\nstart = { world = [2.0, 3.0, 0.0] }\nend = { body = \"beam\", anchor = [1.0, 0.0, 0.0], clamp = true }\n";
+        let (e, shown) = world_err(&format!("{BEAM}{cable}"));
+        assert!(matches!(e, SimError::Unsupported { .. }), "{shown}");
+        assert!(shown.starts_with("bad.toml:22:1:") && shown.contains("clamped to body `beam`"), "{shown}");
+        // Pinned, it runs.
+        let ok = format!("{BEAM}{}", cable.replace(", clamp = true", ""));
+        World::new(parse(&ok, "ok.toml").unwrap()).unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// What used to be refused now builds: a free dynamic body, a cable
+    /// starting on a free dynamic body, a body between two cables, joints
+    /// between dynamic bodies.
+    #[test]
+    fn formerly_refused_layouts_build() {
+        let src = r#"[simulation]
+duration = 1.0
+dt = 0.01
+
+[[body]]
+name = "rock"
+type = "dynamic"
+shape = "ball"
+radius = 0.2
+mass = 5.0
+position = [5.0, 1.0, 0.0]
+
+[[body]]
+name = "hook"
+type = "dynamic"
+shape = "ball"
+radius = 0.1
+mass = 50.0
+position = [0.0, -2.0, 0.0]
+
+[[body]]
+name = "load"
+type = "dynamic"
+shape = "cuboid"
+half_extents = [0.2, 0.2, 0.2]
+mass = 200.0
+position = [0.0, -4.2, 0.0]
+
+[[body]]
+name = "arm"
+type = "dynamic"
+shape = "capsule"
+radius = 0.05
+half_height = 0.3
+mass = 2.0
+position = [0.0, -4.7, 0.0]
+
+[[joint]]
+name = "wrist"
+type = "spherical"
+body1 = "load"
+body2 = "arm"
+anchor1 = [0.0, -0.2, 0.0]
+anchor2 = [0.0, 0.3, 0.0]
+
+[[cable]]
+name = "upper"
+length = 2.0
+segments = 4
+diameter = 0.02
+linear_density = 1.0
+ea = 1e5
+ei = 1.0
+gj = 1.0
+start = { world = [0.0, 0.0, 0.0] }
+end = { body = "hook" }
+
+[[cable]]
+name = "lower"
+length = 2.0
+segments = 4
+diameter = 0.02
+linear_density = 1.0
+ea = 1e5
+ei = 1.0
+gj = 1.0
+start = { body = "hook" }
+end = { body = "load", anchor = [0.0, 0.2, 0.0] }
+"#;
+        let mut w = World::new(parse(src, "ok.toml").unwrap()).unwrap_or_else(|e| panic!("{e}"));
+        for _ in 0..10 {
+            w.step().unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+}

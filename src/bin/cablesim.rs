@@ -78,8 +78,11 @@ fn load(file: &Path) -> Result<(scenario::Scenario, World), ExitCode> {
     })?;
     let world = World::new(sc.clone()).map_err(|e| {
         eprintln!("error: {e}");
-        ExitCode::from(if matches!(e, SimError::Diverged { .. } | SimError::Static { .. }) { 3 } else { 2 })
+        ExitCode::from(if matches!(e, SimError::Diverged { .. } | SimError::Static { .. } | SimError::BodyDiverged { .. }) { 3 } else { 2 })
     })?;
+    for w in &world.warnings {
+        eprintln!("warning: {w}");
+    }
     Ok((sc, world))
 }
 

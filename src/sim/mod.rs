@@ -2,5 +2,6 @@
 //! they carry as lumped links) from a validated [`Scenario`](crate::scenario::Scenario),
 //! steps them frame by frame and samples the probes. `cablesim run` uses it;
 //! the Bevy plugin steps the same [`Cable`](crate::cable::Cable)s.
+mod rapier;
 mod world;
 pub use self::world::{shape_inertia, SimError, World, STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};

@@ -1,46 +1,119 @@
-//! [`World`]: the cables of a scenario, stepped together.
+//! [`World`]: the cables, rapier bodies and rapier joints of a scenario,
+//! stepped together.
 //!
 //! ## What maps to what
 //! * A cable end on a `fixed` body, a `kinematic` body (with its `motion`)
 //!   or a world point is the base (start) or an implicit anchor spring (end)
 //!   of that cable's chain.
-//! * A `dynamic` body at a cable's end that no joint and no other cable
-//!   holds (hook, payload) is a lumped link of the chain: a ball joint at
-//!   the anchor (or rigidly clamped), with its mass and full rotary inertia.
-//! * A `dynamic` body at a cable's start that one `prismatic` joint holds to
-//!   the world (a trolley on its rail) is a link of the chain too, behind a
-//!   prismatic sub-joint; a `drive` on that joint acts on it (a force table,
-//!   or a velocity motor: an implicit damper `c (v_target − v)` with
-//!   `c = m/(2 dt)`, saturating at `max_force`).
-//!
-//! * A free start floats (the path gives its initial shape).
-//! * A kinematic body with a `spin` motion turns the base of a cable that
-//!   starts on it (orientation, the anchor point's velocity and
-//!   acceleration, angular velocity and acceleration); a cable end on it
+//! * **Absorbed bodies.** A `dynamic` body at the `end` of exactly one
+//!   cable, at no other cable end and in no joint (hook, payload) is a lumped
+//!   link of the chain: a ball joint at the anchor (or rigidly clamped),
+//!   with its mass and full rotary inertia. A `dynamic` body at the `start`
+//!   of exactly one cable, at no other cable end, whose only joint is one
+//!   `prismatic` joint to the world (a trolley on its rail) is a link of the
+//!   chain too, behind a prismatic sub-joint; a `drive` on that joint acts
+//!   on it (a force table, or a velocity motor: an implicit damper
+//!   `c (v_target − v)` with `c = m/(2 dt)`, saturating at `max_force`).
+//!   Absorbed bodies are **not** rapier bodies (no collider: rapier bodies
+//!   do not touch them), and their rails are not rapier joints.
+//! * **Rapier bodies.** Every other body is a rapier3d body in a plain
+//!   [`rapier3d::prelude::PhysicsWorld`] (no Bevy): dynamic, fixed or
+//!   kinematic-position-based, with its one collider (ball, cuboid, capsule
+//!   or cylinder along local y, the body's `friction`), the mass `mass` with
+//!   the shape's uniform-solid inertia (rapier's collider mass properties,
+//!   equal to [`shape_inertia`]), its initial `linear_velocity` /
+//!   `angular_velocity`, `[simulation] gravity`, sleeping off, gyroscopic
+//!   torques on. A kinematic body with a `motion` is moved to the motion's
+//!   pose at the end of each frame (`set_next_kinematic_position`).
+//! * **Rapier joints.** Every joint that is not an absorbed trolley's rail
+//!   is a rapier impulse joint (`fixed`, `revolute`, `prismatic`,
+//!   `spherical`) between the two bodies (`world`: a fixed ground body at
+//!   the origin), at `anchor1`/`anchor2` (which must be the same world point
+//!   at t = 0 within 1 mm), about/along `axis` (body1 frame). The joint
+//!   frames coincide at t = 0, so the joint coordinate (revolute angle,
+//!   prismatic slide) is 0 at t = 0 and `limits` are measured from there.
+//!   Contacts between the two jointed bodies are off. A `drive` with a
+//!   `force` table applies F(t + dt/2)·dt per frame along the axis (equal
+//!   and opposite at the two anchor points), or a torque about it (revolute);
+//!   a `velocity` drive is rapier's joint motor (acceleration-based damping
+//!   1/dt: the velocity error halves every frame) with `max_force`.
+//! * **Cables on dynamic rapier bodies (explicit coupling)**, as the Bevy
+//!   plugin's `CarriedBody::Explicit` / `ExplicitEnd`: a cable `start` on a
+//!   dynamic rapier body is the chain's base, following the body's anchor
+//!   point sampled at the start of the frame (pose, velocity, angular
+//!   velocity, and the velocity's finite difference over the last frame as
+//!   acceleration, extrapolated over the frame); the body gets the chain's
+//!   base load (the spatial force about the chain origin, moved to the body
+//!   centre). A pinned cable `end` on a dynamic rapier body is the implicit
+//!   end anchor spring whose target follows the sampled body point; the
+//!   body gets minus the spring's force at that point. The reactions are
+//!   averaged over the frame's cable sub-steps and applied as impulses.
+//!   **Stability:** the exchange lags one frame, so it is an explicit
+//!   scheme: it is stable roughly when k·h²/m ≲ 1, with k the coupling
+//!   stiffness (about EA/L_e of the element next to the body), h the frame
+//!   `dt` and m the body's effective mass at the anchor; the rope mass that
+//!   follows the body rigidly should also be well below the body's. Joints
+//!   that hold the body (a `fixed` joint to the world) raise its effective
+//!   mass and keep it stable beyond that. [`World::new`] puts a note in
+//!   [`World::warnings`] for every coupling with EA·h²/(L_e·m) > 1.
+//! * The other cable features: a free start floats (the path gives its
+//!   initial shape). A kinematic body with a `spin` motion turns the base
+//!   of a cable that starts on it (orientation, the anchor point's velocity
+//!   and acceleration, angular velocity and acceleration); a cable end on it
 //!   is an anchor spring to the turning point (a clamped end is refused).
-//! * A cable's `loads` are constant point loads on its chain
+//!   A cable's `loads` are constant point loads on its chain
 //!   ([`Cable::add_point_load_and_moment`]); `stress_free` maps to
 //!   [`RopeBuilder::stress_free_shape`]; `[simulation] statics = true` puts
-//!   every cable into its static equilibrium before t = 0
-//!   ([`Cable::solve_static`], [`STATIC_TOLERANCE`],
+//!   every cable into its static equilibrium before t = 0 (rapier bodies
+//!   held where they are; [`Cable::solve_static`], [`STATIC_TOLERANCE`],
 //!   [`STATIC_MAX_ITERATIONS`]), or fails with [`SimError::Static`].
-//! * Initial `linear_velocity` / `angular_velocity` of carried bodies set
+//!   Initial `linear_velocity` / `angular_velocity` of absorbed bodies set
 //!   the chain's rates ([`Cable::set_link_velocities`], after the static
 //!   start), or fail with [`SimError::InitialVelocity`].
 //!
-//! Anything else (a dynamic body held by several cables or joints, a cable
-//! starting on a free dynamic body, winches, contact
-//! probes, wind and water) is reported as not yet supported, with the file
-//! position, rather than simulated wrongly.
+//! ## Frame order (deterministic)
+//! [`World::step`] advances one frame `dt`:
+//! 1. sample the dynamic rapier bodies that cables hang on (anchor point
+//!    pose, velocity, acceleration by finite difference);
+//! 2. step every cable over the frame in `substeps` sub-steps, with its
+//!    trolley drive, collecting its reactions on those bodies;
+//! 3. apply the reactions to the rapier bodies as impulses;
+//! 4. move kinematic bodies to their motion at t + dt, apply joint force
+//!    drives, set joint motor targets (at t + dt), and step rapier by `dt`
+//!    (rapier sub-steps internally: `num_solver_iterations` = 4 sub-steps
+//!    of symplectic Euler). A non-finite rapier body fails the frame with
+//!    [`SimError::BodyDiverged`].
+//!
+//! ## Probes
+//! Probes of rapier bodies read rapier (origin = centre of mass). Joint
+//! probes of rapier joints: `position` is the revolute angle (deg,
+//! unwrapped, 0 at t = 0) or the prismatic slide (anchor2 − anchor1)·axis
+//! (m); `velocity` its rate; `force` is the drive's force (N) or torque
+//! (N·m) along/about the world axis (velocity motors: rapier's motor
+//! impulse over its last sub-step). The reaction force of an undriven
+//! rapier joint is not reported yet: a `force` probe on one is refused.
+//! `system` energies add the rapier dynamic bodies' kinetic energy
+//! (translation + rotation) and gravitational energy −m g·x to the cables'.
+//!
+//! ## Refused
+//! Anything this runner would simulate wrongly is reported with the file
+//! position (exit status 2): winches, wind and water, `contact_force`
+//! probes, winch probes, a cable `end` clamped to a spinning body or to a
+//! dynamic rapier body (the end spring's orientation hold has a fixed
+//! target), a `force` probe on an undriven rapier joint, and joints whose
+//! anchors are not the same point at t = 0. Cables do not touch colliders
+//! yet (contact is a later issue).
 
 use crate::cable::{
     BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError,
     RopeSection, RopeStart,
 };
 use crate::integrate::{Scheme, SchemeParams, Substeps};
-use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, Location, ProbeTarget, Quantity, Scenario, Shape};
+use super::rapier::RapierWorld;
+use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, JointKind, Location, ProbeTarget, Quantity, Scenario, Shape};
 use glam::{DMat3, DQuat, DVec3, EulerRot};
-use std::sync::Arc;
+use std::collections::HashSet;
+use std::sync::{Arc, Mutex};
 use thiserror::Error;
 
 /// Why a scenario cannot be run or stopped.
@@ -55,6 +128,16 @@ pub enum SimError {
         location: Location,
         /// What.
         what: String,
+    },
+    /// The scenario is inconsistent in a way the parser does not check.
+    #[error("{file}:{location}: {message}")]
+    Invalid {
+        /// Scenario file.
+        file: String,
+        /// Where.
+        location: Location,
+        /// What is wrong.
+        message: String,
     },
     /// A cable could not be built.
     #[error("{file}:{location}: cable `{cable}`: {source}")]
@@ -98,6 +181,14 @@ pub enum SimError {
         /// What went wrong.
         source: Box<CableError>,
     },
+    /// A rapier body's state became non-finite.
+    #[error("body `{body}` diverged at t = {time} s (non-finite rapier state)")]
+    BodyDiverged {
+        /// Body name.
+        body: String,
+        /// Simulation time at the start of the failing frame, s.
+        time: f64,
+    },
     /// A cable diverged or its step failed.
     #[error("cable `{cable}` failed at t = {time} s: {source}")]
     Diverged {
@@ -140,6 +231,114 @@ pub fn shape_inertia(shape: &Shape, mass: f64) -> DMat3 {
     DMat3::from_diagonal(d)
 }
 
+/// Pose and velocity of a rapier body's attachment point at the start of
+/// a frame, shared with the cable's base motion or end-spring target.
+#[derive(Debug, Clone, Copy, Default)]
+struct Sample {
+    /// Frame start time, s.
+    t0: f64,
+    position: DVec3,
+    rotation: DMat3,
+    velocity: DVec3,
+    angular_velocity: DVec3,
+    /// Finite difference of the point velocity over the last frame.
+    acceleration: DVec3,
+    /// Centre of mass of the body (its origin), m.
+    com: DVec3,
+}
+
+/// Sample of the point `anchor` (body frame) of rapier body `h`.
+fn sample(rw: &RapierWorld, h: rapier3d::prelude::RigidBodyHandle, anchor: DVec3) -> Sample {
+    let (p, q) = rw.pose_of(h);
+    let r = DMat3::from_quat(q);
+    let a = r * anchor;
+    let (v, w) = rw.velocity_of(h);
+    Sample { t0: 0.0, position: p + a, rotation: r, velocity: v + w.cross(a), angular_velocity: w, acceleration: DVec3::ZERO, com: p }
+}
+
+/// Force (N) and moment about `com` (N·m) that a cable puts on the body
+/// at its start (`start`: the chain's base load) or end (minus the end
+/// anchor spring's force on the chain, at the spring's target point) after
+/// a step ending at `t`.
+fn reaction(cable: &Cable, start: bool, com: DVec3, t: f64) -> (DVec3, DVec3) {
+    let ch = &cable.model.chain;
+    if start {
+        let fc = ch.base_load();
+        (fc.bot, fc.top - (com - ch.origin).cross(fc.bot))
+    } else {
+        let Some(an) = ch.anchors.first() else { return (DVec3::ZERO, DVec3::ZERO) };
+        let p = ch.link_point(an.link, an.local_point);
+        let pv = ch.link_point_velocity(an.link, an.local_point);
+        let (target, target_v) = (an.target)(t);
+        let on_chain = -(p - target) * an.stiffness - (pv - target_v) * an.damping;
+        (-on_chain, (target - com).cross(-on_chain))
+    }
+}
+
+/// Dynamic bodies that cables absorb as links of their chains: a body at
+/// the `end` of exactly one cable and of no other cable end, that no joint
+/// holds (hook, payload); a body at the `start` of exactly one cable and of
+/// no other cable end, held only by one `prismatic` joint to the world
+/// (trolley).
+fn absorbed_bodies(sc: &Scenario) -> HashSet<&str> {
+    let mut out = HashSet::new();
+    for b in sc.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
+        let on = |e: &CableEnd| matches!(e, CableEnd::Body { body, .. } if *body == b.name);
+        let starts = sc.cables.iter().filter(|c| on(&c.start)).count();
+        let ends = sc.cables.iter().filter(|c| on(&c.end)).count();
+        let joints: Vec<_> = sc.joints.iter().filter(|j| j.body1 == b.name || j.body2 == b.name).collect();
+        let absorbed = match (starts, ends, joints.as_slice()) {
+            (0, 1, []) => true,
+            (1, 0, [j]) => j.kind == JointKind::Prismatic && (j.body1 == "world" || j.body2 == "world"),
+            _ => false,
+        };
+        if absorbed {
+            out.insert(b.name.as_str());
+        }
+    }
+    out
+}
+
+fn fmt_point(p: DVec3) -> String {
+    format!("[{:.4}, {:.4}, {:.4}] m", p.x, p.y, p.z)
+}
+
+/// A base motion that follows a shared sample, extrapolated with constant
+/// acceleration over the frame (as the Bevy plugin's `follow`).
+fn follow(sample: Arc<Mutex<Sample>>) -> BaseMotion {
+    BaseMotion::Prescribed(Arc::new(move |t| {
+        let s = *sample.lock().unwrap_or_else(|e| e.into_inner());
+        let dt = t - s.t0;
+        BaseState {
+            rotation: s.rotation,
+            position: s.position + s.velocity * dt + 0.5 * s.acceleration * dt * dt,
+            angular_velocity: s.angular_velocity,
+            velocity: s.velocity + s.acceleration * dt,
+            angular_acceleration: DVec3::ZERO,
+            acceleration: s.acceleration,
+        }
+    }))
+}
+
+/// How a cable end is coupled to a dynamic body that rapier keeps
+/// (explicit exchange, one frame lag).
+#[derive(Debug)]
+struct Coupling {
+    /// Index into the rapier bodies.
+    body: usize,
+    /// Anchor in the body frame, m.
+    anchor: DVec3,
+    /// `true`: the cable's start (base follows the body, the body gets
+    /// the base load); `false`: its end (anchor spring target follows the
+    /// body point, the body gets minus the spring force).
+    start: bool,
+    /// The shared sample the chain reads.
+    sample: Arc<Mutex<Sample>>,
+    /// Impulse (N·s) and angular impulse about the body's centre (N·m·s)
+    /// collected over the frame's cable sub-steps.
+    impulse: (DVec3, DVec3),
+}
+
 /// One simulated cable and the scenario bodies it carries.
 #[derive(Debug)]
 struct SimCable {
@@ -149,20 +348,27 @@ struct SimCable {
     bodies: Vec<(String, BodyInChain)>,
     /// Prismatic joint of the start body (joint name, drive).
     slide: Option<(String, Option<Drive>)>,
+    /// Ends on dynamic rapier bodies.
+    couplings: Vec<Coupling>,
 }
 
-/// The cables of a scenario, stepped together (see the module docs).
+/// The cables, rapier bodies and joints of a scenario, stepped together
+/// (see the module docs).
 #[derive(Debug)]
 pub struct World {
     /// The scenario.
     pub scenario: Scenario,
     cables: Vec<SimCable>,
+    rapier: RapierWorld,
     /// Simulation time, s.
     pub time: f64,
     /// Frames stepped.
     pub steps: u64,
     /// Cable sub-steps per frame.
     pub substeps: u32,
+    /// Notes about the run that are not errors: explicit couplings beyond
+    /// their estimated stability limit (see the module docs).
+    pub warnings: Vec<String>,
 }
 
 impl World {
@@ -187,28 +393,51 @@ impl World {
         let ic = &sim.integrator;
         let params = SchemeParams { beta: ic.beta, gamma: ic.gamma, theta: ic.theta, alpha: ic.alpha, rho_inf: ic.rho_inf, w: ic.w };
         let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
-        let mut cables = Vec::new();
-        for c in &scenario.cables {
-            cables.push(build_cable(&scenario, c, &scheme, &file)?);
-        }
-        // Every dynamic body must be carried by exactly one cable.
-        for b in scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
-            let holders = cables.iter().filter(|c| c.bodies.iter().any(|(n, _)| *n == b.name)).count();
-            if holders != 1 {
+        // Dynamic bodies that become links of a cable's chain; every other
+        // body is a rapier body.
+        let absorbed = absorbed_bodies(&scenario);
+        let rail = |j: &scenario::Joint| {
+            j.kind == JointKind::Prismatic && [&j.body1, &j.body2].iter().any(|n| absorbed.contains(n.as_str()))
+        };
+        for p in &scenario.probes {
+            let ProbeTarget::Joint(name) = &p.target else { continue };
+            let Some(j) = scenario.joints.iter().find(|j| j.name == *name) else { continue };
+            if rail(j) {
+                continue;
+            }
+            if p.quantity == Quantity::Force && j.drive.is_none() {
                 return Err(unsupported(
-                    b.location,
-                    format!("dynamic body `{}` held by {holders} cables (this runner simulates dynamic bodies carried by exactly one cable)", b.name),
+                    p.location,
+                    format!("probe `{}`: the `force` of joint `{name}`, which has no `drive` (the reaction force of a rapier joint; a driven joint reports its drive force)", p.name),
                 ));
             }
         }
-        for j in &scenario.joints {
-            let carried = cables.iter().any(|c| c.slide.as_ref().is_some_and(|(n, _)| *n == j.name));
-            let static_bodies = [&j.body1, &j.body2].iter().all(|n| {
-                *n == "world" || scenario.body(n).is_some_and(|b| b.kind != BodyKind::Dynamic)
-            });
-            if !carried && !static_bodies {
-                return Err(unsupported(j.location, format!("joint `{}` between dynamic bodies", j.name)));
+        let mut rapier = RapierWorld::new(sim.gravity, sim.dt);
+        for b in scenario.bodies.iter().filter(|b| !absorbed.contains(b.name.as_str())) {
+            rapier.add_body(b);
+        }
+        for j in scenario.joints.iter().filter(|j| !rail(j)) {
+            let point = |body: &str, anchor: DVec3| scenario.body(body).map_or(anchor, |b| b.world_point(anchor));
+            let (p1, p2) = (point(&j.body1, j.anchor1), point(&j.body2, j.anchor2));
+            if p1.distance(p2) > 1e-3 {
+                return Err(SimError::Invalid {
+                    file: file.clone(),
+                    location: j.location,
+                    message: format!(
+                        "joint `{}`: `anchor1` is at {} in the world but `anchor2` at {}; a joint's two anchors must be the same point at t = 0 (within 1 mm)",
+                        j.name,
+                        fmt_point(p1),
+                        fmt_point(p2)
+                    ),
+                });
             }
+            let handle = |n: &str| rapier.body(n).map(|b| b.handle);
+            let (h1, h2) = (handle(&j.body1), handle(&j.body2));
+            rapier.add_joint(j, h1, h2, sim.dt);
+        }
+        let mut cables = Vec::new();
+        for c in &scenario.cables {
+            cables.push(build_cable(&scenario, c, &scheme, &file, &absorbed, &rapier)?);
         }
         if sim.statics {
             // Start from the static equilibrium (gravity, loads, held ends).
@@ -251,16 +480,56 @@ impl World {
                 c.cable.integrator.substeps = Substeps::Auto;
             }
         }
-        Ok(World { scenario, cables, time: 0.0, steps: 0, substeps })
+        // Explicit couplings: estimated stability k·h²/m (k the stiffness of
+        // the element next to the body, m the body's mass).
+        let mut warnings = Vec::new();
+        for c in &cables {
+            let le = c.cable.model.layout.element_length;
+            let k = c.cable.model.section.ea / le;
+            for cp in &c.couplings {
+                let b = &rapier.bodies[cp.body];
+                let ratio = k * sim.dt * sim.dt / b.mass;
+                if ratio > 1.0 {
+                    warnings.push(format!(
+                        "cable `{}` {} on body `{}` is coupled explicitly with k·h²/m = {ratio:.3e} > 1 (k = EA/L_e = {k:.4e} N/m, h = {} s, m = {} kg): it may be unstable unless joints hold the body; see docs/scenario.md \"Explicit coupling\"",
+                        c.name,
+                        if cp.start { "start" } else { "end" },
+                        b.name,
+                        sim.dt,
+                        b.mass
+                    ));
+                }
+            }
+        }
+        Ok(World { scenario, cables, rapier, time: 0.0, steps: 0, substeps, warnings })
     }
 
-    /// Advances every cable by one frame `dt` (in `substeps` sub-steps).
+    /// Advances the world by one frame `dt`: samples the rapier bodies the
+    /// cables hang on, steps every cable (in `substeps` sub-steps, with its
+    /// drives), applies the cables' reactions to those bodies, then steps
+    /// rapier (see the module docs).
     pub fn step(&mut self) -> Result<(), SimError> {
         let dt = self.scenario.simulation.dt;
         let h = dt / self.substeps as f64;
+        let t0 = self.time;
+        // 1. Sample the rapier bodies the cables are coupled to.
+        for c in &mut self.cables {
+            for cp in &mut c.couplings {
+                let rb = &self.rapier.bodies[cp.body];
+                let mut s = sample(&self.rapier, rb.handle, cp.anchor);
+                s.t0 = t0;
+                let mut guard = cp.sample.lock().unwrap_or_else(|e| e.into_inner());
+                if self.steps > 0 {
+                    s.acceleration = (s.velocity - guard.velocity) / dt;
+                }
+                *guard = s;
+                cp.impulse = (DVec3::ZERO, DVec3::ZERO);
+            }
+        }
+        // 2. Step every cable; collect the reactions over its sub-steps.
         for c in &mut self.cables {
             for k in 0..self.substeps {
-                let t = self.time + k as f64 * h;
+                let t = t0 + k as f64 * h;
                 match &c.slide {
                     Some((_, Some(Drive::Force { force }))) => {
                         // Drive force at the sub-step's midpoint.
@@ -272,11 +541,41 @@ impl World {
                     _ => {}
                 }
                 c.cable.step(h).map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source: Box::new(source) })?;
+                for cp in &mut c.couplings {
+                    let com = cp.sample.lock().unwrap_or_else(|e| e.into_inner()).com;
+                    let (f, m) = reaction(&c.cable, cp.start, com, t + h);
+                    cp.impulse.0 += f * h;
+                    cp.impulse.1 += m * h;
+                }
             }
         }
+        // 3. Apply the reactions to the rapier bodies.
+        for c in &self.cables {
+            for cp in &c.couplings {
+                let rb = &mut self.rapier.pw.bodies[self.rapier.bodies[cp.body].handle];
+                rb.apply_impulse(cp.impulse.0.as_vec3(), true);
+                rb.apply_torque_impulse(cp.impulse.1.as_vec3(), true);
+            }
+        }
+        // 4. Step rapier (kinematic motions, joint drives).
+        self.rapier.prepare_step(t0, dt);
+        self.rapier.step().map_err(|body| SimError::BodyDiverged { body, time: t0 })?;
         self.steps += 1;
         self.time = self.steps as f64 * dt;
         Ok(())
+    }
+
+    /// The cables' reactions on the dynamic rapier bodies they are coupled
+    /// to, averaged over the last frame: (cable, body, `true` for the
+    /// cable's start, force N, moment about the body's centre N·m).
+    pub fn coupling_reactions(&self) -> Vec<(&str, &str, bool, DVec3, DVec3)> {
+        let dt = self.scenario.simulation.dt;
+        self.cables
+            .iter()
+            .flat_map(|c| {
+                c.couplings.iter().map(move |cp| (c.name.as_str(), self.rapier.bodies[cp.body].name.as_str(), cp.start, cp.impulse.0 / dt, cp.impulse.1 / dt))
+            })
+            .collect()
     }
 
     /// The cable named `name`.
@@ -308,6 +607,11 @@ impl World {
                 return c.cable.model.body_state(b);
             }
         }
+        if let Some(b) = self.rapier.body(name) {
+            let (p, q) = self.rapier.pose_of(b.handle);
+            let (v, w) = self.rapier.velocity_of(b.handle);
+            return (p, DMat3::from_quat(q), v, w);
+        }
         let b = self.scenario.body(name).expect("probe targets are validated");
         let t = self.time;
         let (v, w) = b.motion.as_ref().map_or((DVec3::ZERO, DVec3::ZERO), |m| (m.velocity_at(t), m.angular_velocity_at(t)));
@@ -317,10 +621,12 @@ impl World {
     fn probe(&self, p: &scenario::Probe) -> Probe {
         match &p.target {
             ProbeTarget::System => {
+                // Cables (with the bodies they carry) + rapier's dynamic bodies.
                 let e = |f: fn(&Cable) -> f64| self.cables.iter().map(|c| f(&c.cable)).sum::<f64>();
+                let ke = self.rapier.kinetic_energy();
                 match p.quantity {
-                    Quantity::KineticEnergy => Probe::Scalar(e(Cable::kinetic_energy)),
-                    _ => Probe::Scalar(e(Cable::energy)),
+                    Quantity::KineticEnergy => Probe::Scalar(e(Cable::kinetic_energy) + ke),
+                    _ => Probe::Scalar(e(Cable::energy) + ke + self.rapier.gravity_energy(self.scenario.simulation.gravity)),
                 }
             }
             ProbeTarget::Body(name) => {
@@ -356,8 +662,19 @@ impl World {
                         let axis = ch.link_rotation(0) * ch.joints[0].axis;
                         Probe::Vector(axis * (ch.joint_forces[0] - ch.joints[0].damping * c.cable.state.v[0]))
                     }
-                    (None, Quantity::Force) => Probe::Vector(DVec3::NAN),
-                    (None, _) => Probe::Scalar(0.0),
+                    (None, q) => match self.rapier.joints.iter().find(|j| j.name == *name) {
+                        // Rapier joint: revolute in degrees, prismatic in m.
+                        Some(j) => {
+                            let deg = if j.kind == JointKind::Revolute { 180.0 / std::f64::consts::PI } else { 1.0 };
+                            match q {
+                                Quantity::Position => Probe::Scalar(self.rapier.joint_position(j) * deg),
+                                Quantity::Velocity => Probe::Scalar(self.rapier.joint_velocity(j) * deg),
+                                // The drive force / torque (non-driven joints are refused).
+                                _ => Probe::Vector(self.rapier.joint_axis(j) * j.drive_force),
+                            }
+                        }
+                        None => Probe::Scalar(f64::NAN),
+                    },
                 }
             }
             ProbeTarget::Winch(_) => Probe::Scalar(f64::NAN),
@@ -435,7 +752,7 @@ fn body_base(b: &scenario::Body, anchor: DVec3) -> BaseMotion {
     }
 }
 
-fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) -> Result<SimCable, SimError> {
+fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str, absorbed: &HashSet<&str>, rapier: &RapierWorld) -> Result<SimCable, SimError> {
     let unsupported = |what: String| SimError::Unsupported { file: file.to_string(), location: c.location, what };
     let section = RopeSection {
         linear_density: c.linear_density,
@@ -455,6 +772,14 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
     }
     let mut bodies = Vec::new();
     let mut slide = None;
+    let mut couplings = Vec::new();
+    // A coupling to rapier body `name` (a dynamic body no cable absorbs).
+    let mut couple = |name: &str, anchor: DVec3, start: bool| {
+        let body = rapier.bodies.iter().position(|b| b.name == name).expect("non-absorbed bodies are rapier bodies");
+        let shared = Arc::new(Mutex::new(sample(rapier, rapier.bodies[body].handle, anchor)));
+        couplings.push(Coupling { body, anchor, start, sample: shared.clone(), impulse: (DVec3::ZERO, DVec3::ZERO) });
+        follow(shared)
+    };
     builder = match &c.start {
         CableEnd::Free => builder.start(RopeStart::Free),
         CableEnd::World { point, clamp } => {
@@ -463,17 +788,12 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
         }
         CableEnd::Body { body, anchor, clamp } => {
             let b = sc.body(body).expect("validated");
-            if b.kind == BodyKind::Dynamic {
-                let joint = sc.joints.iter().find(|j| {
-                    j.kind == scenario::JointKind::Prismatic
-                        && ((j.body1 == "world" && j.body2 == *body) || (j.body2 == "world" && j.body1 == *body))
-                });
-                let Some(j) = joint else {
-                    return Err(unsupported(format!(
-                        "cable `{}` starting on dynamic body `{body}` that no prismatic joint holds to the world",
-                        c.name
-                    )));
-                };
+            if b.kind == BodyKind::Dynamic && !absorbed.contains(body.as_str()) {
+                // Explicit base: follows the rapier body, which gets the base load.
+                let base = couple(body, *anchor, true);
+                builder.start(if *clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) })
+            } else if b.kind == BodyKind::Dynamic {
+                let j = sc.joints.iter().find(|j| j.body1 == *body || j.body2 == *body).expect("an absorbed start body has its rail");
                 let axis = j.axis.unwrap_or(DVec3::X);
                 slide = Some((j.name.clone(), j.drive.clone()));
                 bodies.push((body.clone(), BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
@@ -493,10 +813,22 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
         }
         CableEnd::Body { body, anchor, clamp } => {
             let b = sc.body(body).expect("validated");
-            if b.kind == BodyKind::Dynamic {
-                if sc.joints.iter().any(|j| j.body1 == *body || j.body2 == *body) {
-                    return Err(unsupported(format!("cable `{}` ending on body `{body}` that a joint also holds", c.name)));
+            if b.kind == BodyKind::Dynamic && !absorbed.contains(body.as_str()) {
+                // Explicit end: the anchor spring's target follows the rapier
+                // body's point; the body gets minus the spring force.
+                if *clamp {
+                    return Err(unsupported(format!(
+                        "cable `{}` with its `end` clamped to body `{body}`, which rapier keeps (a dynamic body held by joints or other cables: the end spring's orientation hold has a fixed target; clamp the `start` instead, or leave the end pinned)",
+                        c.name
+                    )));
                 }
+                let BaseMotion::Prescribed(f) = couple(body, *anchor, false) else { unreachable!("follow() is prescribed") };
+                let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |t| {
+                    let s = f(t);
+                    (s.position, s.velocity)
+                });
+                builder.end(RopeEnd::Pinned(target))
+            } else if b.kind == BodyKind::Dynamic {
                 bodies.push((body.clone(), BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
                 builder.end(RopeEnd::Body { body: lumped(b), anchor: *anchor, clamp: *clamp })
             } else {
@@ -525,5 +857,5 @@ fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str) 
     for l in &c.loads {
         cable.add_point_load_and_moment(l.s, l.force, l.moment);
     }
-    Ok(SimCable { name: c.name.clone(), cable, bodies, slide })
+    Ok(SimCable { name: c.name.clone(), cable, bodies, slide, couplings })
 }

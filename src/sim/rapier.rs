@@ -1,0 +1,373 @@
+//! The rapier side of [`World`](super::World): the scenario bodies and
+//! joints that no cable absorbs, in a plain rapier3d [`PhysicsWorld`]
+//! (no Bevy). See the module docs of `world.rs` for the frame order and
+//! the coupling with the cables.
+//!
+//! Rapier works in f32; the poses, velocities and energies read back are
+//! converted to f64.
+
+use crate::scenario::{BodyKind, Drive, Joint, JointKind, Motion, Shape};
+use glam::{DMat3, DQuat, DVec3};
+use rapier3d::prelude as rp;
+
+/// A scenario body kept by rapier.
+#[derive(Debug)]
+pub(crate) struct RapierBody {
+    /// Scenario name.
+    pub name: String,
+    /// Rapier handle.
+    pub handle: rp::RigidBodyHandle,
+    /// Dynamic, fixed or kinematic.
+    pub kind: BodyKind,
+    /// Mass, kg (0 for fixed and kinematic bodies).
+    pub mass: f64,
+    /// Rotational inertia about the centre, body frame, kg·m²
+    /// ([`shape_inertia`](super::shape_inertia)).
+    pub inertia: DMat3,
+    /// Prescribed motion of a kinematic body: (motion, `position`, `rotation`).
+    pub motion: Option<(Motion, DVec3, DQuat)>,
+}
+
+/// A scenario joint kept by rapier (an impulse joint).
+#[derive(Debug)]
+pub(crate) struct RapierJoint {
+    /// Scenario name.
+    pub name: String,
+    /// Rapier handle.
+    pub handle: rp::ImpulseJointHandle,
+    /// Joint type.
+    pub kind: JointKind,
+    /// Rapier handles of body1 and body2 (the ground body for `world`).
+    pub bodies: [rp::RigidBodyHandle; 2],
+    /// Anchors in each body's frame, m.
+    pub anchors: [DVec3; 2],
+    /// Unit axis in body1's frame (revolute, prismatic; x otherwise).
+    pub axis: DVec3,
+    /// Relative orientation R1⁻¹·R2 at t = 0.
+    pub rel0: DQuat,
+    /// The drive, if any.
+    pub drive: Option<Drive>,
+    /// Unwrapped revolute angle, rad (0 at t = 0).
+    pub angle: f64,
+    /// Drive force (N) or torque (N·m) applied in the last frame, along or
+    /// about the axis.
+    pub drive_force: f64,
+}
+
+/// Rapier bodies and joints of a scenario.
+pub(crate) struct RapierWorld {
+    pub pw: rp::PhysicsWorld,
+    /// The ground (`world`): a fixed body without collider at the origin.
+    pub ground: rp::RigidBodyHandle,
+    pub bodies: Vec<RapierBody>,
+    pub joints: Vec<RapierJoint>,
+}
+
+impl std::fmt::Debug for RapierWorld {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RapierWorld").field("bodies", &self.bodies).field("joints", &self.joints).finish_non_exhaustive()
+    }
+}
+
+/// Rapier pose of a position and orientation.
+pub(crate) fn pose(p: DVec3, q: DQuat) -> rp::Pose {
+    rp::Pose::from_parts(p.as_vec3(), q.as_quat())
+}
+
+/// The collider of a scenario shape (local y is the capsule / cylinder axis).
+pub(crate) fn collider(shape: &Shape) -> rp::ColliderBuilder {
+    match *shape {
+        Shape::Ball { radius } => rp::ColliderBuilder::ball(radius as f32),
+        Shape::Cuboid { half_extents: h } => rp::ColliderBuilder::cuboid(h.x as f32, h.y as f32, h.z as f32),
+        Shape::Capsule { radius, half_height } => rp::ColliderBuilder::capsule_y(half_height as f32, radius as f32),
+        Shape::Cylinder { radius, half_height } => rp::ColliderBuilder::cylinder(half_height as f32, radius as f32),
+    }
+}
+
+impl RapierWorld {
+    /// An empty world with `gravity` stepping at `dt`.
+    pub fn new(gravity: DVec3, dt: f64) -> RapierWorld {
+        let mut pw = rp::PhysicsWorld::new();
+        pw.gravity = gravity.as_vec3();
+        pw.integration_parameters.dt = dt as f32;
+        let ground = pw.insert_body(rp::RigidBodyBuilder::fixed());
+        RapierWorld { pw, ground, bodies: Vec::new(), joints: Vec::new() }
+    }
+
+    /// Adds a scenario body with its one collider (mass from `mass`, the
+    /// rotary inertia of the shape as a uniform solid: rapier's collider
+    /// mass properties, which equal [`shape_inertia`](super::shape_inertia)).
+    pub fn add_body(&mut self, b: &crate::scenario::Body) {
+        let builder = match b.kind {
+            BodyKind::Dynamic => rp::RigidBodyBuilder::dynamic(),
+            BodyKind::Fixed => rp::RigidBodyBuilder::fixed(),
+            BodyKind::Kinematic => rp::RigidBodyBuilder::kinematic_position_based(),
+        };
+        let rb = builder
+            .pose(pose(b.position_at(0.0), b.rotation_at(0.0)))
+            .linvel(b.linear_velocity.as_vec3())
+            .angvel(b.angular_velocity.as_vec3())
+            .can_sleep(false)
+            .gyroscopic_forces_enabled(true);
+        let mass = b.mass.unwrap_or(0.0);
+        let mut co = collider(&b.shape).friction(b.friction as f32);
+        if b.kind == BodyKind::Dynamic {
+            co = co.mass(mass as f32);
+        }
+        let handle = self.pw.insert_body(rb);
+        self.pw.insert_collider(co, Some(handle));
+        self.bodies.push(RapierBody {
+            name: b.name.clone(),
+            handle,
+            kind: b.kind,
+            mass,
+            inertia: super::shape_inertia(&b.shape, mass),
+            motion: b.motion.clone().map(|m| (m, b.position, b.rotation)),
+        });
+    }
+
+    /// The rapier body of scenario body `name`.
+    pub fn body(&self, name: &str) -> Option<&RapierBody> {
+        self.bodies.iter().find(|b| b.name == name)
+    }
+
+    /// Pose (origin, orientation) of a rapier body in f64.
+    pub fn pose_of(&self, h: rp::RigidBodyHandle) -> (DVec3, DQuat) {
+        let p = self.pw.bodies[h].position();
+        (p.translation.as_dvec3(), p.rotation.as_dquat().normalize())
+    }
+
+    /// Velocity of the origin (= centre of mass) and angular velocity, f64.
+    pub fn velocity_of(&self, h: rp::RigidBodyHandle) -> (DVec3, DVec3) {
+        let rb = &self.pw.bodies[h];
+        (rb.linvel().as_dvec3(), rb.angvel().as_dvec3())
+    }
+
+    /// Adds a scenario joint between two rapier bodies (`None`: the ground)
+    /// given their poses at t = 0. The joint frames coincide at t = 0: the
+    /// joint coordinate (revolute angle, prismatic slide) is zero there and
+    /// `limits` are measured from there. Contacts between the two bodies are
+    /// off.
+    pub fn add_joint(&mut self, j: &Joint, b1: Option<rp::RigidBodyHandle>, b2: Option<rp::RigidBodyHandle>, dt: f64) {
+        let (h1, h2) = (b1.unwrap_or(self.ground), b2.unwrap_or(self.ground));
+        let (_, r1) = self.pose_of(h1);
+        let (_, r2) = self.pose_of(h2);
+        let axis = j.axis.unwrap_or(DVec3::X);
+        let frame = DQuat::from_rotation_arc(DVec3::X, axis);
+        let locked = match j.kind {
+            JointKind::Fixed => rp::JointAxesMask::LOCKED_FIXED_AXES,
+            JointKind::Revolute => rp::JointAxesMask::LOCKED_REVOLUTE_AXES,
+            JointKind::Prismatic => rp::JointAxesMask::LOCKED_PRISMATIC_AXES,
+            JointKind::Spherical => rp::JointAxesMask::LOCKED_SPHERICAL_AXES,
+        };
+        let mut data = rp::GenericJointBuilder::new(locked).contacts_enabled(false).build();
+        data.local_frame1 = pose(j.anchor1, frame);
+        data.local_frame2 = pose(j.anchor2, (r2.inverse() * r1 * frame).normalize());
+        let free = if j.kind == JointKind::Revolute { rp::JointAxis::AngX } else { rp::JointAxis::LinX };
+        if let Some([lo, hi]) = j.limits {
+            data.set_limits(free, [lo as f32, hi as f32]);
+        }
+        if let Some(Drive::Velocity { velocity, max_force }) = &j.drive {
+            // Implicit velocity motor: the velocity error halves every frame
+            // (acceleration-based damping 1/dt), saturating at max_force.
+            data.set_motor_model(free, rp::MotorModel::AccelerationBased);
+            data.set_motor_velocity(free, velocity.value_at(dt) as f32, (1.0 / dt) as f32);
+            data.set_motor_max_force(free, *max_force as f32);
+        }
+        let handle = self.pw.insert_impulse_joint(h1, h2, data);
+        self.joints.push(RapierJoint {
+            name: j.name.clone(),
+            handle,
+            kind: j.kind,
+            bodies: [h1, h2],
+            anchors: [j.anchor1, j.anchor2],
+            axis,
+            rel0: (r1.inverse() * r2).normalize(),
+            drive: j.drive.clone(),
+            angle: 0.0,
+            drive_force: 0.0,
+        });
+    }
+
+    /// World axis of joint `j` (body1's axis turned with body1).
+    pub fn joint_axis(&self, j: &RapierJoint) -> DVec3 {
+        self.pose_of(j.bodies[0]).1 * j.axis
+    }
+
+    /// Revolute angle in (−π, π] from the bodies' orientations (twist of
+    /// the relative rotation since t = 0 about the axis).
+    fn raw_angle(&self, j: &RapierJoint) -> f64 {
+        let (_, r1) = self.pose_of(j.bodies[0]);
+        let (_, r2) = self.pose_of(j.bodies[1]);
+        let d = (r1.inverse() * r2) * j.rel0.inverse();
+        let twist = DVec3::new(d.x, d.y, d.z).dot(j.axis);
+        let a = 2.0 * twist.atan2(d.w);
+        if a > std::f64::consts::PI {
+            a - std::f64::consts::TAU
+        } else if a <= -std::f64::consts::PI {
+            a + std::f64::consts::TAU
+        } else {
+            a
+        }
+    }
+
+    /// Joint coordinate: revolute angle (rad, unwrapped), prismatic slide
+    /// (m): (anchor2 − anchor1) · axis in the world; 0 for the others.
+    pub fn joint_position(&self, j: &RapierJoint) -> f64 {
+        match j.kind {
+            JointKind::Revolute => j.angle,
+            JointKind::Prismatic => {
+                let (p1, r1) = self.pose_of(j.bodies[0]);
+                let (p2, r2) = self.pose_of(j.bodies[1]);
+                ((p2 + r2 * j.anchors[1]) - (p1 + r1 * j.anchors[0])).dot(r1 * j.axis)
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Rate of [`joint_position`](Self::joint_position): rad/s or m/s.
+    pub fn joint_velocity(&self, j: &RapierJoint) -> f64 {
+        let (p1, r1) = self.pose_of(j.bodies[0]);
+        let (p2, r2) = self.pose_of(j.bodies[1]);
+        let (v1, w1) = self.velocity_of(j.bodies[0]);
+        let (v2, w2) = self.velocity_of(j.bodies[1]);
+        let a = r1 * j.axis;
+        match j.kind {
+            JointKind::Revolute => (w2 - w1).dot(a),
+            JointKind::Prismatic => {
+                let (x1, x2) = (r1 * j.anchors[0], r2 * j.anchors[1]);
+                let (va, vb) = (v1 + w1.cross(x1), v2 + w2.cross(x2));
+                (vb - va).dot(a) + ((p2 + x2) - (p1 + x1)).dot(w1.cross(a))
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Before a rapier step over `[t, t + dt]`: moves kinematic bodies to
+    /// their motion at t + dt, applies force drives (value at t + dt/2) as
+    /// impulses, sets velocity motors' targets (value at t + dt).
+    pub fn prepare_step(&mut self, t: f64, dt: f64) {
+        for b in &self.bodies {
+            if let Some((m, p0, r0)) = &b.motion {
+                let next = pose(m.position_at(t + dt, *p0), m.rotation_at(t + dt) * *r0);
+                self.pw.bodies[b.handle].set_next_kinematic_position(next);
+            }
+        }
+        for k in 0..self.joints.len() {
+            let j = &self.joints[k];
+            let free = if j.kind == JointKind::Revolute { rp::JointAxis::AngX } else { rp::JointAxis::LinX };
+            match j.drive.clone() {
+                Some(Drive::Force { force }) => {
+                    let f = force.value_at(t + 0.5 * dt);
+                    let a = self.joint_axis(j);
+                    let [h1, h2] = j.bodies;
+                    if j.kind == JointKind::Revolute {
+                        let imp = (a * f * dt).as_vec3();
+                        self.pw.bodies[h2].apply_torque_impulse(imp, true);
+                        self.pw.bodies[h1].apply_torque_impulse(-imp, true);
+                    } else {
+                        // Equal and opposite at the joint points.
+                        let (p1, r1) = self.pose_of(h1);
+                        let (p2, r2) = self.pose_of(h2);
+                        let imp = (a * f * dt).as_vec3();
+                        let (x1, x2) = ((p1 + r1 * j.anchors[0]).as_vec3(), (p2 + r2 * j.anchors[1]).as_vec3());
+                        self.pw.bodies[h2].apply_impulse_at_point(imp, x2, true);
+                        self.pw.bodies[h1].apply_impulse_at_point(-imp, x1, true);
+                    }
+                    self.joints[k].drive_force = f;
+                }
+                Some(Drive::Velocity { velocity, max_force }) => {
+                    let target = velocity.value_at(t + dt) as f32;
+                    if let Some(ij) = self.pw.impulse_joints.get_mut(j.handle, true) {
+                        ij.data.set_motor_velocity(free, target, (1.0 / dt) as f32);
+                        ij.data.set_motor_max_force(free, max_force as f32);
+                    }
+                }
+                None => {}
+            }
+        }
+    }
+
+    /// Steps rapier by its `dt`, then unwraps the revolute angles and reads
+    /// the velocity motors' forces. Returns the name of the first body whose
+    /// state is no longer finite.
+    pub fn step(&mut self) -> Result<(), String> {
+        self.pw.step();
+        for b in &self.bodies {
+            let rb = &self.pw.bodies[b.handle];
+            let p = rb.position();
+            let finite = p.translation.is_finite() && p.rotation.is_finite() && rb.linvel().is_finite() && rb.angvel().is_finite();
+            // Rapier disables (quarantines) bodies whose state became non-finite.
+            if !finite || !rb.is_enabled() {
+                return Err(b.name.clone());
+            }
+        }
+        // Rapier sub-steps every step (`num_solver_iterations`); the motor
+        // impulse it writes back is the last sub-step's, and acts on body2
+        // with the opposite sign.
+        let h_sub = self.pw.integration_parameters.dt as f64 / self.pw.integration_parameters.num_solver_iterations.max(1) as f64;
+        for k in 0..self.joints.len() {
+            if self.joints[k].kind == JointKind::Revolute {
+                let raw = self.raw_angle(&self.joints[k]);
+                let j = &mut self.joints[k];
+                let prev = j.angle;
+                let turns = ((prev - raw) / std::f64::consts::TAU).round();
+                j.angle = raw + turns * std::f64::consts::TAU;
+            }
+            if matches!(self.joints[k].drive, Some(Drive::Velocity { .. })) {
+                let free = if self.joints[k].kind == JointKind::Revolute { rp::JointAxis::AngX } else { rp::JointAxis::LinX };
+                let imp = self.pw.impulse_joints.get(self.joints[k].handle).map_or(0.0, |ij| ij.data.motors[free as usize].impulse);
+                self.joints[k].drive_force = -(imp as f64) / h_sub;
+            }
+        }
+        Ok(())
+    }
+
+    /// Kinetic energy (translation + rotation) of the dynamic bodies, J.
+    pub fn kinetic_energy(&self) -> f64 {
+        self.bodies
+            .iter()
+            .filter(|b| b.kind == BodyKind::Dynamic)
+            .map(|b| {
+                let (v, w) = self.velocity_of(b.handle);
+                let r = DMat3::from_quat(self.pose_of(b.handle).1);
+                let wl = r.transpose() * w;
+                0.5 * b.mass * v.length_squared() + 0.5 * wl.dot(b.inertia * wl)
+            })
+            .sum()
+    }
+
+    /// Gravitational energy −m g·x of the dynamic bodies, J.
+    pub fn gravity_energy(&self, gravity: DVec3) -> f64 {
+        self.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic).map(|b| -b.mass * gravity.dot(self.pose_of(b.handle).0)).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rapier's collider mass properties (uniform density from `mass`)
+    /// equal [`shape_inertia`](super::super::shape_inertia) for every shape.
+    #[test]
+    fn rapier_mass_properties_match_shape_inertia() {
+        let shapes = [
+            Shape::Ball { radius: 0.7 },
+            Shape::Cuboid { half_extents: DVec3::new(0.5, 1.5, 0.25) },
+            Shape::Capsule { radius: 0.3, half_height: 1.2 },
+            Shape::Cylinder { radius: 0.4, half_height: 0.9 },
+        ];
+        for s in &shapes {
+            let m = 250.0;
+            let co = collider(s).mass(m as f32).build();
+            let mp = co.mass_properties();
+            let i = mp.reconstruct_inertia_matrix();
+            let ours = super::super::shape_inertia(s, m);
+            assert!((mp.mass() as f64 - m).abs() < 1e-3, "{s:?}: mass {}", mp.mass());
+            for (c, (a, b)) in [(i.x_axis, ours.x_axis), (i.y_axis, ours.y_axis), (i.z_axis, ours.z_axis)].into_iter().enumerate() {
+                let d = (a.as_dvec3() - b).abs().max_element();
+                assert!(d <= 1e-5 * ours.x_axis.x.max(ours.y_axis.y), "{s:?} column {c}: rapier {a:?} vs {b:?}");
+            }
+        }
+    }
+}
