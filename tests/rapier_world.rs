@@ -254,8 +254,12 @@ s = 0.0
 /// world point above its right end. h = 1/600 s (the explicit exchange
 /// needs k·h²/m_eff ≲ 1: k = EA/L_e = 3.3e6 N/m, m_eff = I_pivot/r² =
 /// 167 kg → 0.055). Reference after 10 s: static balance T_end·2 m =
-/// m g·1 m, T_end = m g/2; the beam tilts by the rope stretch T L/EA over
-/// the 2 m lever.
+/// m g·1 m, T_end = m g/2; the beam tilts by the rope stretch (end force
+/// and the rope's own weight) over the 2 m lever. (This test found the
+/// coupling reading rapier's post-step velocities, which still carry the
+/// soft constraints' bias: the end spring's damping turned them into a
+/// 0.2 mm offset of the rope end, a 2 % tilt error. The samples now take
+/// their velocities from the poses' change over the frame.)
 #[test]
 fn cable_end_on_a_heavy_jointed_beam_is_in_static_balance() {
     let (world, rows) = run(r#"
@@ -316,8 +320,12 @@ quantity = "rotation"
 component = "z"
 "#);
     let t_ref = 500.0 * G / 2.0;
-    let stretch = t_ref * 3.0 / 1e6;
-    let angle_ref = -(stretch / 2.0).to_degrees();
+    // Stretch of the rope under the end force plus its own weight, for the
+    // discrete chain (each element's weight hangs below its axial spring:
+    // joint i carries N − i elements): T L/EA + μ g L_e² Σ(N − i)/EA.
+    let (n, le) = (10.0, 0.3);
+    let stretch = (t_ref * 3.0 + 1.0 * G * le * le * n * (n + 1.0) / 2.0) / 1e6;
+    let angle_ref = -(stretch / 2.0).asin().to_degrees();
     // Means over the last second (a residual wobble of ~1e-3° remains).
     let tail = &rows[rows.len() - 600..];
     let mean = |c: usize| tail.iter().map(|r| r[c]).sum::<f64>() / tail.len() as f64;
@@ -335,7 +343,7 @@ component = "z"
     println!("angle {angle:.5}° vs {angle_ref:.5}° ({:+.2e}); end force {force:.3} N vs {t_ref:.3} N ({:+.2e}); last-second swing {swing:.2e}°; pivot off by {pivot:?} m", angle / angle_ref - 1.0, force / t_ref - 1.0);
     assert!(world.warnings.is_empty());
     assert!((force / t_ref - 1.0).abs() < 5e-3, "end force {force} vs {t_ref}");
-    assert!((angle / angle_ref - 1.0).abs() < 0.05, "angle {angle} vs {angle_ref}");
+    assert!((angle / angle_ref - 1.0).abs() < 5e-3, "angle {angle} vs {angle_ref}");
     assert!(swing < 5e-3, "still swinging: {swing}°");
     assert!(pivot.0.abs() < 1e-4 && pivot.1.abs() < 1e-4, "the hinge opened: {pivot:?}");
 }

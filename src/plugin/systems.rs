@@ -256,6 +256,15 @@ pub(crate) fn read_bodies(mut cables: Query<&mut CableSim>, ctx: ReadRapierConte
             let mut guard = shared.lock().unwrap_or_else(|e| e.into_inner());
             s.t0 = sim.cable.time();
             if sim.cable.steps > 0 {
+                if rb.body_type() == RigidBodyType::Dynamic {
+                    // A dynamic body's velocity from its pose change over the
+                    // step: rapier's post-step velocities still carry the
+                    // soft constraints' bias, which a stiff end spring's
+                    // damping turns into an offset (see sim::World).
+                    let v = (s.position - guard.position) / dt;
+                    s.angular_velocity = crate::cable::chain::rotation_vector(&(s.rotation * guard.rotation.transpose())) / dt;
+                    s.velocity = v;
+                }
                 s.acceleration = (s.velocity - guard.velocity) / dt;
             }
             *guard = s;

@@ -520,7 +520,16 @@ impl World {
                 s.t0 = t0;
                 let mut guard = cp.sample.lock().unwrap_or_else(|e| e.into_inner());
                 if self.steps > 0 {
-                    s.acceleration = (s.velocity - guard.velocity) / dt;
+                    // Velocities from the poses' change over the frame, not
+                    // rapier's velocities: after a step those still carry
+                    // the soft constraints' bias (a hinged beam at rest read
+                    // 9e-3 m/s at its tip), which the stiff end spring's
+                    // damping turned into a 0.2 mm offset of the end.
+                    let v = (s.position - guard.position) / dt;
+                    let w = crate::cable::chain::rotation_vector(&(s.rotation * guard.rotation.transpose())) / dt;
+                    s.acceleration = (v - guard.velocity) / dt;
+                    s.velocity = v;
+                    s.angular_velocity = w;
                 }
                 *guard = s;
                 cp.impulse = (DVec3::ZERO, DVec3::ZERO);
