@@ -549,6 +549,12 @@ impl World {
                     }
                     _ => {}
                 }
+                if self.steps == 0 && k == 0 {
+                    // Start from the acceleration the loads and drives give
+                    // (not the force-free one of the cable's creation, which
+                    // generalized-α would carry as half a step's lag).
+                    c.cable.recompute_acceleration().map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source: Box::new(source) })?;
+                }
                 c.cable.step(h).map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source: Box::new(source) })?;
                 for cp in &mut c.couplings {
                     let com = cp.sample.lock().unwrap_or_else(|e| e.into_inner()).com;
