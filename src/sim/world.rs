@@ -40,22 +40,26 @@
 //! * **Cables on dynamic rapier bodies (explicit coupling)**, as the Bevy
 //!   plugin's `CarriedBody::Explicit` / `ExplicitEnd`: a cable `start` on a
 //!   dynamic rapier body is the chain's base, following the body's anchor
-//!   point sampled at the start of the frame (pose, velocity, angular
-//!   velocity, and the velocity's finite difference over the last frame as
-//!   acceleration, extrapolated over the frame); the body gets the chain's
+//!   point sampled at the start of each sub-step (pose; velocity, angular
+//!   velocity and acceleration from the pose's change over the last
+//!   sub-step, since rapier's post-step velocities carry its soft
+//!   constraints' bias; extrapolated over the sub-step); the body gets the chain's
 //!   base load (the spatial force about the chain origin, moved to the body
 //!   centre). A pinned cable `end` on a dynamic rapier body is the implicit
 //!   end anchor spring whose target follows the sampled body point; the
 //!   body gets minus the spring's force at that point. The reactions are
-//!   averaged over the frame's cable sub-steps and applied as impulses.
-//!   **Stability:** the exchange lags one frame, so it is an explicit
+//!   applied as impulses over each sub-step.
+//!   **Stability:** the exchange lags one sub-step, so it is an explicit
 //!   scheme: it is stable roughly when k·h²/m ≲ 1, with k the coupling
-//!   stiffness (about EA/L_e of the element next to the body), h the frame
-//!   `dt` and m the body's effective mass at the anchor; the rope mass that
-//!   follows the body rigidly should also be well below the body's. Joints
-//!   that hold the body (a `fixed` joint to the world) raise its effective
-//!   mass and keep it stable beyond that. [`World::new`] puts a note in
-//!   [`World::warnings`] for every coupling with EA·h²/(L_e·m) > 1.
+//!   stiffness (about EA/L_e of the element next to the body), h the
+//!   sub-step `dt/substeps` and m the body's effective mass at the anchor;
+//!   the rope mass that follows the body rigidly should also be well below
+//!   the body's. Joints that hold the body (a `fixed` joint to the world)
+//!   raise its effective mass and keep it stable beyond that. `[simulation]
+//!   substeps` sub-steps cables and rapier together, so n sub-steps buy a
+//!   factor n² in k·h²/m. [`World::new`] puts a note in [`World::warnings`]
+//!   for every coupling with EA·h²/(L_e·m) > 1, with the sub-steps that
+//!   would bring it to 1.
 //! * The other cable features: a free start floats (the path gives its
 //!   initial shape). A kinematic body with a `spin` motion turns the base
 //!   of a cable that starts on it (orientation, the anchor point's velocity
@@ -72,14 +76,16 @@
 //!   start), or fail with [`SimError::InitialVelocity`].
 //!
 //! ## Frame order (deterministic)
-//! [`World::step`] advances one frame `dt`:
+//! [`World::step`] advances one frame `dt` in `substeps` sub-steps of
+//! `h = dt/substeps` (default 1), each:
 //! 1. sample the dynamic rapier bodies that cables hang on (anchor point
 //!    pose, velocity, acceleration by finite difference);
-//! 2. step every cable over the frame in `substeps` sub-steps, with its
-//!    trolley drive, collecting its reactions on those bodies;
+//! 2. step every cable by `h` with its trolley drive (before the very first
+//!    step, recompute its acceleration with its loads and drives), and take
+//!    its reactions on those bodies;
 //! 3. apply the reactions to the rapier bodies as impulses;
-//! 4. move kinematic bodies to their motion at t + dt, apply joint force
-//!    drives, set joint motor targets (at t + dt), and step rapier by `dt`
+//! 4. move kinematic bodies to their motion at t + h, apply joint force
+//!    drives, set joint motor targets (at t + h), and step rapier by `h`
 //!    (rapier sub-steps internally: `num_solver_iterations` = 4 sub-steps
 //!    of symplectic Euler). A non-finite rapier body fails the frame with
 //!    [`SimError::BodyDiverged`].
@@ -412,7 +418,7 @@ impl World {
                 ));
             }
         }
-        let mut rapier = RapierWorld::new(sim.gravity, sim.dt);
+        let mut rapier = RapierWorld::new(sim.gravity, sim.dt / sim.substeps.unwrap_or(1).max(1) as f64);
         for b in scenario.bodies.iter().filter(|b| !absorbed.contains(b.name.as_str())) {
             rapier.add_body(b);
         }
@@ -488,15 +494,16 @@ impl World {
             let k = c.cable.model.section.ea / le;
             for cp in &c.couplings {
                 let b = &rapier.bodies[cp.body];
-                let ratio = k * sim.dt * sim.dt / b.mass;
+                let h = sim.dt / substeps as f64;
+                let ratio = k * h * h / b.mass;
                 if ratio > 1.0 {
                     warnings.push(format!(
-                        "cable `{}` {} on body `{}` is coupled explicitly with k·h²/m = {ratio:.3e} > 1 (k = EA/L_e = {k:.4e} N/m, h = {} s, m = {} kg): it may be unstable unless joints hold the body; see docs/scenario.md \"Explicit coupling\"",
+                        "cable `{}` {} on body `{}` is coupled explicitly with k·h²/m = {ratio:.3e} > 1 (k = EA/L_e = {k:.4e} N/m, h = {h} s, m = {} kg): it may be unstable unless joints hold the body; `substeps = {}` would bring it to 1 (see docs/scenario.md \"Explicit coupling\")",
                         c.name,
                         if cp.start { "start" } else { "end" },
                         b.name,
-                        sim.dt,
-                        b.mass
+                        b.mass,
+                        (substeps as f64 * ratio.sqrt()).ceil()
                     ));
                 }
             }
@@ -512,33 +519,35 @@ impl World {
         let dt = self.scenario.simulation.dt;
         let h = dt / self.substeps as f64;
         let t0 = self.time;
-        // 1. Sample the rapier bodies the cables are coupled to.
-        for c in &mut self.cables {
-            for cp in &mut c.couplings {
-                let rb = &self.rapier.bodies[cp.body];
-                let mut s = sample(&self.rapier, rb.handle, cp.anchor);
-                s.t0 = t0;
-                let mut guard = cp.sample.lock().unwrap_or_else(|e| e.into_inner());
-                if self.steps > 0 {
-                    // Velocities from the poses' change over the frame, not
-                    // rapier's velocities: after a step those still carry
-                    // the soft constraints' bias (a hinged beam at rest read
-                    // 9e-3 m/s at its tip), which the stiff end spring's
-                    // damping turned into a 0.2 mm offset of the end.
-                    let v = (s.position - guard.position) / dt;
-                    let w = crate::cable::chain::rotation_vector(&(s.rotation * guard.rotation.transpose())) / dt;
-                    s.acceleration = (v - guard.velocity) / dt;
-                    s.velocity = v;
-                    s.angular_velocity = w;
+        for k in 0..self.substeps {
+            let t = t0 + k as f64 * h;
+            let first = self.steps == 0 && k == 0;
+            // 1. Sample the rapier bodies the cables are coupled to.
+            for c in &mut self.cables {
+                for cp in &mut c.couplings {
+                    let rb = &self.rapier.bodies[cp.body];
+                    let mut s = sample(&self.rapier, rb.handle, cp.anchor);
+                    s.t0 = t;
+                    let mut guard = cp.sample.lock().unwrap_or_else(|e| e.into_inner());
+                    if !first {
+                        // Velocities from the poses' change over the
+                        // sub-step, not rapier's velocities: after a step
+                        // those still carry the soft constraints' bias (a
+                        // hinged beam at rest read 9e-3 m/s at its tip),
+                        // which the stiff end spring's damping turned into a
+                        // 0.2 mm offset of the end.
+                        let v = (s.position - guard.position) / h;
+                        let w = crate::cable::chain::rotation_vector(&(s.rotation * guard.rotation.transpose())) / h;
+                        s.acceleration = (v - guard.velocity) / h;
+                        s.velocity = v;
+                        s.angular_velocity = w;
+                    }
+                    *guard = s;
+                    cp.impulse = (DVec3::ZERO, DVec3::ZERO);
                 }
-                *guard = s;
-                cp.impulse = (DVec3::ZERO, DVec3::ZERO);
             }
-        }
-        // 2. Step every cable; collect the reactions over its sub-steps.
-        for c in &mut self.cables {
-            for k in 0..self.substeps {
-                let t = t0 + k as f64 * h;
+            // 2. Step every cable with its drives; its reactions.
+            for c in &mut self.cables {
                 match &c.slide {
                     Some((_, Some(Drive::Force { force }))) => {
                         // Drive force at the sub-step's midpoint.
@@ -549,42 +558,42 @@ impl World {
                     }
                     _ => {}
                 }
-                if self.steps == 0 && k == 0 {
+                let diverged = |source| SimError::Diverged { cable: c.name.clone(), time: t, source: Box::new(source) };
+                if first {
                     // Start from the acceleration the loads and drives give
                     // (not the force-free one of the cable's creation, which
                     // generalized-α would carry as half a step's lag).
-                    c.cable.recompute_acceleration().map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source: Box::new(source) })?;
+                    c.cable.recompute_acceleration().map_err(diverged)?;
                 }
-                c.cable.step(h).map_err(|source| SimError::Diverged { cable: c.name.clone(), time: t, source: Box::new(source) })?;
+                c.cable.step(h).map_err(diverged)?;
                 for cp in &mut c.couplings {
                     let com = cp.sample.lock().unwrap_or_else(|e| e.into_inner()).com;
                     let (f, m) = reaction(&c.cable, cp.start, com, t + h);
-                    cp.impulse.0 += f * h;
-                    cp.impulse.1 += m * h;
+                    cp.impulse = (f * h, m * h);
                 }
             }
-        }
-        // 3. Apply the reactions to the rapier bodies.
-        for c in &self.cables {
-            for cp in &c.couplings {
-                let rb = &mut self.rapier.pw.bodies[self.rapier.bodies[cp.body].handle];
-                rb.apply_impulse(cp.impulse.0.as_vec3(), true);
-                rb.apply_torque_impulse(cp.impulse.1.as_vec3(), true);
+            // 3. Apply the reactions to the rapier bodies.
+            for c in &self.cables {
+                for cp in &c.couplings {
+                    let rb = &mut self.rapier.pw.bodies[self.rapier.bodies[cp.body].handle];
+                    rb.apply_impulse(cp.impulse.0.as_vec3(), true);
+                    rb.apply_torque_impulse(cp.impulse.1.as_vec3(), true);
+                }
             }
+            // 4. Step rapier over the sub-step (kinematic motions, joint drives).
+            self.rapier.prepare_step(t, h);
+            self.rapier.step().map_err(|body| SimError::BodyDiverged { body, time: t })?;
         }
-        // 4. Step rapier (kinematic motions, joint drives).
-        self.rapier.prepare_step(t0, dt);
-        self.rapier.step().map_err(|body| SimError::BodyDiverged { body, time: t0 })?;
         self.steps += 1;
         self.time = self.steps as f64 * dt;
         Ok(())
     }
 
     /// The cables' reactions on the dynamic rapier bodies they are coupled
-    /// to, averaged over the last frame: (cable, body, `true` for the
-    /// cable's start, force N, moment about the body's centre N·m).
+    /// to, over the last sub-step: (cable, body, `true` for the cable's
+    /// start, force N, moment about the body's centre N·m).
     pub fn coupling_reactions(&self) -> Vec<(&str, &str, bool, DVec3, DVec3)> {
-        let dt = self.scenario.simulation.dt;
+        let dt = self.scenario.simulation.dt / self.substeps as f64;
         self.cables
             .iter()
             .flat_map(|c| {
