@@ -576,3 +576,37 @@ fn force_drive_from_rest_gives_momentum_f_t() {
     // The rope (5 g at up to 0.6 m/s, 3e-3 N·s = 2.4e-3 F h) is left out of P.
     assert!(worst < 1e-2, "{worst}");
 }
+
+/// `boom_hoist.toml`: a boom that rapier keeps, held by a pendant rope and
+/// carrying a hoist rope with a swinging payload (two explicit couplings,
+/// 12 sub-steps per 1/60 s frame). Averaged over whole half periods of the
+/// swing, the tip carries the hanging weight: the pendant's tension near
+/// the tip and the boom's sag match the statics in the file's header.
+#[test]
+fn boom_hoist_scenario_statics_on_average() {
+    let (_, rows) = run("assets/scenarios/boom_hoist.toml");
+    let t: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+    let x: Vec<f64> = rows.iter().map(|r| r[4] - 10.0).collect();
+    let ups: Vec<f64> = (1..x.len()).filter(|&k| x[k - 1] < 0.0 && x[k] >= 0.0).map(|k| t[k - 1] + (t[k] - t[k - 1]) * -x[k - 1] / (x[k] - x[k - 1])).collect();
+    let period = (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64;
+    // The last two swing periods (four half periods of the vertical load).
+    let (t1, t0) = (ups[ups.len() - 1], ups[ups.len() - 1] - 2.0 * period);
+    let window: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] > t0 && r[0] <= t1).collect();
+    let mean = |c: usize| window.iter().map(|r| r[c]).sum::<f64>() / window.len() as f64;
+    let (angle, tension) = (mean(1), mean(2));
+    let g: f64 = 9.81;
+    let v_tip: f64 = (2000.0 * 5.0 + (1000.0 + 1.6 * 20.0) * 10.0) * g / 10.0;
+    let w_p = 1.6 * g * 14.142136;
+    let h = v_tip + w_p / 2.0;
+    // The probe reads the last element's inboard joint, 0.707 m up the
+    // 45° pendant: + μ g L_e sin 45°·(its vertical share) = μ g L_e / 2.
+    let t_ref = h.hypot(v_tip) + 1.6 * g * 0.707107 / 2.0;
+    let angle_ref = -(std::f64::consts::SQRT_2 * h.hypot(v_tip) * 14.142136 / 2e7 / 10.0).to_degrees();
+    println!(
+        "swing period {period:.4} s; over t = {t0:.2}…{t1:.2} s: pendant tension {tension:.1} N vs {t_ref:.1} N ({:+.2e}), boom angle {angle:.5}° vs {angle_ref:.5}° ({:+.2e})",
+        tension / t_ref - 1.0,
+        angle / angle_ref - 1.0
+    );
+    assert!((tension / t_ref - 1.0).abs() < 5e-3, "{tension}");
+    assert!((angle / angle_ref - 1.0).abs() < 1e-2, "{angle}");
+}
