@@ -11,4 +11,6 @@ pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, R
 mod tangent_tests;
 #[allow(clippy::module_inception)]
 pub mod cable;
+#[cfg(feature = "rapier")]
+pub(crate) mod coupling;
 pub use self::cable::{Cable, CableError, ElementForces, LinkVelocity};

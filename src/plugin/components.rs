@@ -3,7 +3,7 @@
 use crate::cable::{BodyInChain, Cable, RopeSection};
 use crate::integrate::Scheme;
 use bevy::prelude::*;
-use glam::DVec3;
+use crate::cable::coupling::BodySample;
 use std::sync::{Arc, Mutex};
 
 /// Where a cable end is held.
@@ -90,19 +90,6 @@ pub enum CarriedBody {
     ExplicitEnd,
 }
 
-/// Shared pose/velocity of a body that drives a cable base: written by
-/// [`CableSystems::ReadBodies`](super::CableSystems::ReadBodies), read by the
-/// cable's base motion during the step.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct BaseSample {
-    pub t0: f64,
-    pub position: DVec3,
-    pub rotation: glam::DMat3,
-    pub velocity: DVec3,
-    pub angular_velocity: DVec3,
-    pub acceleration: DVec3,
-}
-
 /// The simulated cable (f64 core) and its couplings.
 #[derive(Component, Debug)]
 pub struct CableSim {
@@ -112,7 +99,7 @@ pub struct CableSim {
     pub bodies: Vec<(Entity, CarriedBody)>,
     /// Samples of the bodies that move the cable's base or end target,
     /// shared with the cable's motion closures.
-    pub(crate) samples: Vec<(Entity, Vec3, Arc<Mutex<BaseSample>>)>,
+    pub(crate) samples: Vec<(Entity, Vec3, Arc<Mutex<BodySample>>)>,
     /// A trolley absorbed as the chain's root prismatic link: its entity
     /// (which holds the rapier `ImpulseJoint` whose motor drives it) and the
     /// rapier joint coordinate at the chain coordinate 0, m.

@@ -1,7 +1,8 @@
 //! The cable plugin's systems (see the order table in the module docs).
 
-use super::components::{BaseSample, CableAnchor, CableDescriptor, CableDiverged, CableSim, CableState, CarriedBody};
+use super::components::{CableAnchor, CableDescriptor, CableDiverged, CableSim, CableState, CarriedBody};
 use super::CableSettings;
+use crate::cable::coupling::{follow, reaction, BodySample};
 use crate::cable::{BaseMotion, BaseState, BodyInChain, Cable, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeStart};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
@@ -29,30 +30,13 @@ fn lumped_of(rb: &RapierBody) -> LumpedBody {
     }
 }
 
-/// A base motion (or anchor target) that follows a shared sample,
-/// extrapolating it with constant acceleration over the step.
-fn follow(sample: Arc<Mutex<BaseSample>>) -> BaseMotion {
-    BaseMotion::Prescribed(Arc::new(move |t| {
-        let s = *sample.lock().unwrap_or_else(|e| e.into_inner());
-        let dt = t - s.t0;
-        BaseState {
-            rotation: s.rotation,
-            position: s.position + s.velocity * dt + 0.5 * s.acceleration * dt * dt,
-            angular_velocity: s.angular_velocity,
-            velocity: s.velocity + s.acceleration * dt,
-            angular_acceleration: DVec3::ZERO,
-            acceleration: s.acceleration,
-        }
-    }))
-}
-
-fn sample_body(rb: &RapierBody, anchor: Vec3) -> BaseSample {
+fn sample_body(rb: &RapierBody, anchor: Vec3) -> BodySample {
     let (p, r) = pose_of(rb);
     let a = r * anchor.as_dvec3();
     let w = rb.angvel().as_dvec3();
     let com = rb.center_of_mass().as_dvec3();
     let v = rb.linvel().as_dvec3() + w.cross(p + a - com);
-    BaseSample { t0: 0.0, position: p + a, rotation: r, velocity: v, angular_velocity: w, acceleration: DVec3::ZERO }
+    BodySample { t0: 0.0, position: p + a, rotation: r, velocity: v, angular_velocity: w, acceleration: DVec3::ZERO, com }
 }
 
 /// Builds cables from new [`CableDescriptor`]s.
@@ -253,21 +237,11 @@ pub(crate) fn read_bodies(mut cables: Query<&mut CableSim>, ctx: ReadRapierConte
         for (be, anchor, shared) in &sim.samples {
             let Some(rb) = handles.get(*be).ok().and_then(|h| ctx.rigidbody_set.bodies.get(h.0)) else { continue };
             let mut s = sample_body(rb, *anchor);
-            let mut guard = shared.lock().unwrap_or_else(|e| e.into_inner());
             s.t0 = sim.cable.time();
-            if sim.cable.steps > 0 {
-                if rb.body_type() == RigidBodyType::Dynamic {
-                    // A dynamic body's velocity from its pose change over the
-                    // step: rapier's post-step velocities still carry the
-                    // soft constraints' bias, which a stiff end spring's
-                    // damping turns into an offset (see sim::World).
-                    let v = (s.position - guard.position) / dt;
-                    s.angular_velocity = crate::cable::chain::rotation_vector(&(s.rotation * guard.rotation.transpose())) / dt;
-                    s.velocity = v;
-                }
-                s.acceleration = (s.velocity - guard.velocity) / dt;
-            }
-            *guard = s;
+            // A dynamic body's velocity from its pose change (see
+            // BodySample::update); kinematic ones report theirs exactly.
+            let since = (sim.cable.steps > 0).then_some(dt);
+            shared.lock().unwrap_or_else(|e| e.into_inner()).update(s, since, rb.body_type() == RigidBodyType::Dynamic);
         }
     }
 }
@@ -374,26 +348,12 @@ pub(crate) fn write_bodies(cables: Query<&CableSim>, mut ctx: WriteRapierContext
                     let q = glam::DQuat::from_mat3(&r).as_quat();
                     rb.set_next_kinematic_position(bevy_rapier3d::rapier::math::Pose::from_parts(p.as_vec3(), q));
                 }
-                CarriedBody::ExplicitEnd if !sim.failed => {
-                    // The anchor spring pulls the chain with F; the body gets −F
-                    // at its point.
-                    let ch = &sim.cable.model.chain;
-                    if let Some(an) = ch.anchors.first() {
-                        let p = ch.link_point(an.link, an.local_point);
-                        let pv = ch.link_point_velocity(an.link, an.local_point);
-                        let (target, target_v) = (an.target)(sim.cable.time());
-                        let force = -(p - target) * an.stiffness - (pv - target_v) * an.damping;
-                        rb.apply_impulse_at_point((-force * dt).as_vec3(), target.as_vec3(), true);
-                    }
-                }
-                CarriedBody::Explicit if !sim.failed => {
-                    // The chain pulls its base with the composite load at
-                    // the first sub-joint (spatial force about the origin).
-                    let ch = &sim.cable.model.chain;
-                    let fc = ch.base_load();
-                    let com = rb.center_of_mass().as_dvec3() - ch.origin;
-                    let moment = fc.top - com.cross(fc.bot);
-                    rb.apply_impulse((fc.bot * dt).as_vec3(), true);
+                CarriedBody::ExplicitEnd | CarriedBody::Explicit if !sim.failed => {
+                    // The chain's base load (start), or minus the end anchor
+                    // spring's force at its point (end).
+                    let com = rb.center_of_mass().as_dvec3();
+                    let (force, moment) = reaction(&sim.cable, *c == CarriedBody::Explicit, com, sim.cable.time());
+                    rb.apply_impulse((force * dt).as_vec3(), true);
                     rb.apply_torque_impulse((moment * dt).as_vec3(), true);
                 }
                 _ => {}

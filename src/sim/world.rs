@@ -116,6 +116,7 @@ use crate::cable::{
 };
 use crate::integrate::{Scheme, SchemeParams, Substeps};
 use super::rapier::RapierWorld;
+use crate::cable::coupling::{follow, reaction, BodySample};
 use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, JointKind, Location, ProbeTarget, Quantity, Scenario, Shape};
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 use std::collections::HashSet;
@@ -237,48 +238,13 @@ pub fn shape_inertia(shape: &Shape, mass: f64) -> DMat3 {
     DMat3::from_diagonal(d)
 }
 
-/// Pose and velocity of a rapier body's attachment point at the start of
-/// a frame, shared with the cable's base motion or end-spring target.
-#[derive(Debug, Clone, Copy, Default)]
-struct Sample {
-    /// Frame start time, s.
-    t0: f64,
-    position: DVec3,
-    rotation: DMat3,
-    velocity: DVec3,
-    angular_velocity: DVec3,
-    /// Finite difference of the point velocity over the last frame.
-    acceleration: DVec3,
-    /// Centre of mass of the body (its origin), m.
-    com: DVec3,
-}
-
 /// Sample of the point `anchor` (body frame) of rapier body `h`.
-fn sample(rw: &RapierWorld, h: rapier3d::prelude::RigidBodyHandle, anchor: DVec3) -> Sample {
+fn sample(rw: &RapierWorld, h: rapier3d::prelude::RigidBodyHandle, anchor: DVec3) -> BodySample {
     let (p, q) = rw.pose_of(h);
     let r = DMat3::from_quat(q);
     let a = r * anchor;
     let (v, w) = rw.velocity_of(h);
-    Sample { t0: 0.0, position: p + a, rotation: r, velocity: v + w.cross(a), angular_velocity: w, acceleration: DVec3::ZERO, com: p }
-}
-
-/// Force (N) and moment about `com` (N·m) that a cable puts on the body
-/// at its start (`start`: the chain's base load) or end (minus the end
-/// anchor spring's force on the chain, at the spring's target point) after
-/// a step ending at `t`.
-fn reaction(cable: &Cable, start: bool, com: DVec3, t: f64) -> (DVec3, DVec3) {
-    let ch = &cable.model.chain;
-    if start {
-        let fc = ch.base_load();
-        (fc.bot, fc.top - (com - ch.origin).cross(fc.bot))
-    } else {
-        let Some(an) = ch.anchors.first() else { return (DVec3::ZERO, DVec3::ZERO) };
-        let p = ch.link_point(an.link, an.local_point);
-        let pv = ch.link_point_velocity(an.link, an.local_point);
-        let (target, target_v) = (an.target)(t);
-        let on_chain = -(p - target) * an.stiffness - (pv - target_v) * an.damping;
-        (-on_chain, (target - com).cross(-on_chain))
-    }
+    BodySample { t0: 0.0, position: p + a, rotation: r, velocity: v + w.cross(a), angular_velocity: w, acceleration: DVec3::ZERO, com: p }
 }
 
 /// Dynamic bodies that cables absorb as links of their chains: a body at
@@ -309,23 +275,6 @@ fn fmt_point(p: DVec3) -> String {
     format!("[{:.4}, {:.4}, {:.4}] m", p.x, p.y, p.z)
 }
 
-/// A base motion that follows a shared sample, extrapolated with constant
-/// acceleration over the frame (as the Bevy plugin's `follow`).
-fn follow(sample: Arc<Mutex<Sample>>) -> BaseMotion {
-    BaseMotion::Prescribed(Arc::new(move |t| {
-        let s = *sample.lock().unwrap_or_else(|e| e.into_inner());
-        let dt = t - s.t0;
-        BaseState {
-            rotation: s.rotation,
-            position: s.position + s.velocity * dt + 0.5 * s.acceleration * dt * dt,
-            angular_velocity: s.angular_velocity,
-            velocity: s.velocity + s.acceleration * dt,
-            angular_acceleration: DVec3::ZERO,
-            acceleration: s.acceleration,
-        }
-    }))
-}
-
 /// How a cable end is coupled to a dynamic body that rapier keeps
 /// (explicit exchange, one frame lag).
 #[derive(Debug)]
@@ -339,7 +288,7 @@ struct Coupling {
     /// body point, the body gets minus the spring force).
     start: bool,
     /// The shared sample the chain reads.
-    sample: Arc<Mutex<Sample>>,
+    sample: Arc<Mutex<BodySample>>,
     /// Impulse (N·s) and angular impulse about the body's centre (N·m·s)
     /// collected over the frame's cable sub-steps.
     impulse: (DVec3, DVec3),
@@ -528,21 +477,8 @@ impl World {
                     let rb = &self.rapier.bodies[cp.body];
                     let mut s = sample(&self.rapier, rb.handle, cp.anchor);
                     s.t0 = t;
-                    let mut guard = cp.sample.lock().unwrap_or_else(|e| e.into_inner());
-                    if !first {
-                        // Velocities from the poses' change over the
-                        // sub-step, not rapier's velocities: after a step
-                        // those still carry the soft constraints' bias (a
-                        // hinged beam at rest read 9e-3 m/s at its tip),
-                        // which the stiff end spring's damping turned into a
-                        // 0.2 mm offset of the end.
-                        let v = (s.position - guard.position) / h;
-                        let w = crate::cable::chain::rotation_vector(&(s.rotation * guard.rotation.transpose())) / h;
-                        s.acceleration = (v - guard.velocity) / h;
-                        s.velocity = v;
-                        s.angular_velocity = w;
-                    }
-                    *guard = s;
+                    // Velocities from the pose change (see BodySample::update).
+                    cp.sample.lock().unwrap_or_else(|e| e.into_inner()).update(s, (!first).then_some(h), true);
                     cp.impulse = (DVec3::ZERO, DVec3::ZERO);
                 }
             }

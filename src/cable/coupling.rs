@@ -1,0 +1,85 @@
+//! Explicit coupling of a cable to a rigid body that another engine
+//! (rapier) integrates: the body's sampled motion drives the cable's base
+//! or end-spring target over a step, and the cable's reaction goes back to
+//! the body. Shared by the scenario runner (`sim`) and the Bevy plugin.
+
+use super::cable::Cable;
+use super::chain::{rotation_vector, BaseMotion, BaseState};
+use glam::{DMat3, DVec3};
+use std::sync::{Arc, Mutex};
+
+/// Pose and motion of a body's attachment point at the start of a step,
+/// shared with the cable's base motion or end-spring target ([`follow`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct BodySample {
+    /// Time of the sample, s.
+    pub t0: f64,
+    /// Attachment point, m.
+    pub position: DVec3,
+    /// Body orientation.
+    pub rotation: DMat3,
+    /// Attachment point velocity, m/s.
+    pub velocity: DVec3,
+    /// Body angular velocity, rad/s.
+    pub angular_velocity: DVec3,
+    /// Velocity change over the last step, m/s².
+    pub acceleration: DVec3,
+    /// Body centre of mass, m.
+    pub com: DVec3,
+}
+
+impl BodySample {
+    /// Replaces this sample by `new`, taken `since` seconds after it
+    /// (`None`: the first sample, kept as given). The acceleration is the
+    /// velocity change over `since`. With `from_poses`, the velocities are
+    /// the pose change over `since` instead of the ones sampled: rapier's
+    /// post-step velocities still carry its soft constraints' bias (a hinged
+    /// beam at rest read 9e-3 m/s at its tip), which a stiff end spring's
+    /// damping turns into an offset of the rope end (0.2 mm there).
+    pub fn update(&mut self, mut new: BodySample, since: Option<f64>, from_poses: bool) {
+        if let Some(dt) = since {
+            if from_poses {
+                new.velocity = (new.position - self.position) / dt;
+                new.angular_velocity = rotation_vector(&(new.rotation * self.rotation.transpose())) / dt;
+            }
+            new.acceleration = (new.velocity - self.velocity) / dt;
+        }
+        *self = new;
+    }
+}
+
+/// A base motion (or anchor target) that follows a shared sample,
+/// extrapolated with constant acceleration from its time.
+pub(crate) fn follow(sample: Arc<Mutex<BodySample>>) -> BaseMotion {
+    BaseMotion::Prescribed(Arc::new(move |t| {
+        let s = *sample.lock().unwrap_or_else(|e| e.into_inner());
+        let dt = t - s.t0;
+        BaseState {
+            rotation: s.rotation,
+            position: s.position + s.velocity * dt + 0.5 * s.acceleration * dt * dt,
+            angular_velocity: s.angular_velocity,
+            velocity: s.velocity + s.acceleration * dt,
+            angular_acceleration: DVec3::ZERO,
+            acceleration: s.acceleration,
+        }
+    }))
+}
+
+/// Force (N) and moment about `com` (world point, N·m) that a cable puts on
+/// the body at its start (`start`: the chain's base load) or end (minus the
+/// end anchor spring's force on the chain, at the spring's target point),
+/// at time `t` (the end of the step just taken).
+pub(crate) fn reaction(cable: &Cable, start: bool, com: DVec3, t: f64) -> (DVec3, DVec3) {
+    let ch = &cable.model.chain;
+    if start {
+        let fc = ch.base_load();
+        (fc.bot, fc.top - (com - ch.origin).cross(fc.bot))
+    } else {
+        let Some(an) = ch.anchors.first() else { return (DVec3::ZERO, DVec3::ZERO) };
+        let p = ch.link_point(an.link, an.local_point);
+        let pv = ch.link_point_velocity(an.link, an.local_point);
+        let (target, target_v) = (an.target)(t);
+        let on_chain = -(p - target) * an.stiffness - (pv - target_v) * an.damping;
+        (-on_chain, (target - com).cross(-on_chain))
+    }
+}
