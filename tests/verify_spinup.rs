@@ -27,13 +27,9 @@ fn hub(t: f64) -> (f64, f64, f64) {
     }
 }
 
-/// L = 10 m, EA 2.8e7 N, GA 1e7 N, EI = GJ = 1.4e4 N·m², ρA = 1.2 kg/m,
-/// ρI = 6e-4 kg·m (diameter from ρI = ρA r²/4), no gravity, clamped along
-/// +x to a hub turning about +y (which turns +x toward −z).
-fn spin_up(n: usize) -> Cable {
-    let sec = RopeSection { linear_density: 1.2, ea: 2.8e7, ei: 1.4e4, ei2: 1.4e4, gj: 1.4e4, min_breaking_load: 0.0 };
-    let r = (4.0 * 6e-4 / 1.2f64).sqrt();
-    let base = BaseMotion::Prescribed(Arc::new(|t| {
+/// The hub as the beam's clamped base: turning about +y by [`hub`].
+fn hub_base() -> BaseMotion {
+    BaseMotion::Prescribed(Arc::new(|t| {
         let (th, w, al) = hub(t);
         BaseState {
             rotation: DMat3::from_rotation_y(th),
@@ -43,7 +39,16 @@ fn spin_up(n: usize) -> Cable {
             angular_acceleration: DVec3::new(0.0, al, 0.0),
             acceleration: DVec3::ZERO,
         }
-    }));
+    }))
+}
+
+/// L = 10 m, EA 2.8e7 N, GA 1e7 N, EI = GJ = 1.4e4 N·m², ρA = 1.2 kg/m,
+/// ρI = 6e-4 kg·m (diameter from ρI = ρA r²/4), no gravity, clamped along
+/// +x to a hub turning about +y (which turns +x toward −z).
+fn spin_up(n: usize) -> Cable {
+    let sec = RopeSection { linear_density: 1.2, ea: 2.8e7, ei: 1.4e4, ei2: 1.4e4, gj: 1.4e4, min_breaking_load: 0.0 };
+    let r = (4.0 * 6e-4 / 1.2f64).sqrt();
+    let base = hub_base();
     let model = RopeBuilder::new(10.0, n, sec, 2.0 * r)
         .shear_stiffness(1e7)
         .path(vec![DVec3::ZERO, DVec3::new(10.0, 0.0, 0.0)])
@@ -158,17 +163,7 @@ fn spin_up_beam_tip_deflection() {
 #[test]
 fn spin_up_guard_soft_beam_fails_the_band() {
     let sec = RopeSection { linear_density: 1.2, ea: 2.8e7, ei: 1.4e2, ei2: 1.4e2, gj: 1.4e2, min_breaking_load: 0.0 };
-    let base = BaseMotion::Prescribed(Arc::new(|t| {
-        let (th, w, al) = hub(t);
-        BaseState {
-            rotation: DMat3::from_rotation_y(th),
-            position: DVec3::ZERO,
-            angular_velocity: DVec3::new(0.0, w, 0.0),
-            velocity: DVec3::ZERO,
-            angular_acceleration: DVec3::new(0.0, al, 0.0),
-            acceleration: DVec3::ZERO,
-        }
-    }));
+    let base = hub_base();
     let model = RopeBuilder::new(10.0, 10, sec, 0.0894)
         .shear_stiffness(1e7)
         .path(vec![DVec3::ZERO, DVec3::new(10.0, 0.0, 0.0)])

@@ -1,7 +1,8 @@
 //! Explicit coupling of a cable to a rigid body that another engine
 //! (rapier) integrates: the body's sampled motion drives the cable's base
 //! or end-spring target over a step, and the cable's reaction goes back to
-//! the body. Shared by the scenario runner (`sim`) and the Bevy plugin.
+//! the body; and the drive of a trolley absorbed into a cable's chain.
+//! Shared by the scenario runner (`sim`) and the Bevy plugin.
 
 use super::cable::Cable;
 use super::chain::{rotation_vector, BaseMotion, BaseState};
@@ -81,5 +82,26 @@ pub(crate) fn reaction(cable: &Cable, start: bool, com: DVec3, t: f64) -> (DVec3
         let (target, target_v) = (an.target)(t);
         let on_chain = -(p - target) * an.stiffness - (pv - target_v) * an.damping;
         (-on_chain, (target - com).cross(-on_chain))
+    }
+}
+
+/// A spring–damper drive on the chain's root sub-joint (a trolley's rail):
+/// `F = k (x_target − x) + c (v_target − v)`, `x = offset + q₀` (m, the
+/// rail coordinate the targets use), implicit in the cable solve; when the
+/// force it asks for at the current state exceeds `max_force` (N), the
+/// explicit force `±max_force` toward the target instead. Sets the
+/// sub-joint's stiffness, damping, rest and drive force for the coming step;
+/// `k = c = 0` leaves the rail free.
+pub(crate) fn rail_drive(cable: &mut Cable, k: f64, c: f64, offset: f64, target_x: f64, target_v: f64, max_force: f64) {
+    let (x, v) = (offset + cable.state.q[0], cable.state.v[0]);
+    let ch = &mut cable.model.chain;
+    let j = &mut ch.joints[0];
+    let needed = k * (target_x - x) + c * (target_v - v);
+    if needed.abs() <= max_force {
+        (j.stiffness, j.damping, j.rest) = (k, c, target_x - offset);
+        ch.joint_forces[0] = c * target_v;
+    } else {
+        (j.stiffness, j.damping, j.rest) = (0.0, 0.0, 0.0);
+        ch.joint_forces[0] = max_force.copysign(needed);
     }
 }

@@ -2,7 +2,7 @@
 
 use super::components::{CableAnchor, CableDescriptor, CableDiverged, CableSim, CableState, CarriedBody};
 use super::CableSettings;
-use crate::cable::coupling::{follow, reaction, BodySample};
+use crate::cable::coupling::{follow, rail_drive, reaction, BodySample};
 use crate::cable::{BaseMotion, BaseState, BodyInChain, Cable, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeStart};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
@@ -255,28 +255,16 @@ pub(crate) fn read_bodies(mut cables: Query<&mut CableSim>, ctx: ReadRapierConte
 /// the rapier joint coordinate at chain coordinate 0. Without a motor the
 /// root sub-joint is free.
 fn rail_motor(cable: &mut Cable, motor: Option<JointMotor>, offset: f64) {
-    let (x, v) = (offset + cable.state.q[0], cable.state.v[0]);
-    let ch = &mut cable.model.chain;
-    let j = &mut ch.joints[0];
     let Some(m) = motor.filter(|m| m.stiffness != 0.0 || m.damping != 0.0) else {
-        (j.stiffness, j.damping, j.rest) = (0.0, 0.0, 0.0);
-        ch.joint_forces[0] = 0.0;
+        rail_drive(cable, 0.0, 0.0, offset, 0.0, 0.0, f64::INFINITY);
         return;
     };
     let scale = match m.model {
-        MotorModel::AccelerationBased => j.link.map_or(0.0, |l| l.mass),
+        MotorModel::AccelerationBased => cable.model.chain.joints[0].link.map_or(0.0, |l| l.mass),
         MotorModel::ForceBased => 1.0,
     };
     let (k, c) = (m.stiffness as f64 * scale, m.damping as f64 * scale);
-    let (target_x, target_v, max_force) = (m.target_pos as f64, m.target_vel as f64, m.max_force as f64);
-    let needed = k * (target_x - x) + c * (target_v - v);
-    if needed.abs() <= max_force {
-        (j.stiffness, j.damping, j.rest) = (k, c, target_x - offset);
-        ch.joint_forces[0] = c * target_v;
-    } else {
-        (j.stiffness, j.damping, j.rest) = (0.0, 0.0, 0.0);
-        ch.joint_forces[0] = max_force.copysign(needed);
-    }
+    rail_drive(cable, k, c, offset, m.target_pos as f64, m.target_vel as f64, m.max_force as f64);
 }
 
 /// Advances every cable by the fixed step.

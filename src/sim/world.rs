@@ -116,7 +116,7 @@ use crate::cable::{
 };
 use crate::integrate::{Scheme, SchemeParams, Substeps};
 use super::rapier::RapierWorld;
-use crate::cable::coupling::{follow, reaction, BodySample};
+use crate::cable::coupling::{follow, rail_drive, reaction, BodySample};
 use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, JointKind, Location, ProbeTarget, Quantity, Scenario, Shape};
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 use std::collections::HashSet;
@@ -659,17 +659,8 @@ impl World {
 /// would need exceeds the limit. Sets the sub-joint's damping and drive
 /// force for the coming step.
 fn velocity_motor(cable: &mut Cable, target: f64, max_force: f64, h: f64) {
-    let ch = &mut cable.model.chain;
-    let total_mass: f64 = ch.joints.iter().filter_map(|j| j.link.map(|m| m.mass)).sum();
-    let c = total_mass / (2.0 * h);
-    let needed = c * (target - cable.state.v[0]);
-    if needed.abs() <= max_force {
-        ch.joints[0].damping = c;
-        ch.joint_forces[0] = c * target;
-    } else {
-        ch.joints[0].damping = 0.0;
-        ch.joint_forces[0] = max_force.copysign(needed);
-    }
+    let total_mass: f64 = cable.model.chain.joints.iter().filter_map(|j| j.link.map(|m| m.mass)).sum();
+    rail_drive(cable, 0.0, total_mass / (2.0 * h), 0.0, 0.0, target, max_force);
 }
 
 enum Probe {
