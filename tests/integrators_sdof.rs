@@ -808,12 +808,21 @@ impl SecondOrderSystem for StaleTangent {
 fn newton_fallback_splits_steps_and_reports_failure() {
     // c_q (g/l) = h²/2 · 9.81 ≈ 0.7 at h = 0.38: no convergence in 8 iterations,
     // but fine in sub-steps.
+    // (Without the line search: it rescues this case in one step, below.)
     let mut sys = StaleTangent(Pendulum::new(9.81, 1.0), 1.0);
     let mut state = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).expect("state");
-    let mut integ = Integrator::default();
+    let plain = NewtonSettings { line_search: false, ..NewtonSettings::default() };
+    let mut integ = Integrator::default().with_newton(plain.clone());
     let stats = integ.step(&mut sys, &mut state, 0.38).expect("fallback");
     println!("stale tangent, h = 0.38: {stats:?}");
     assert!(stats.substeps_used > 1);
+    // The line search shortens the overshooting corrections of the stale
+    // tangent: one step, no split.
+    let mut searched = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).expect("state");
+    let stats = Integrator::default().step(&mut sys, &mut searched, 0.38).expect("line search");
+    println!("stale tangent with line search, h = 0.38: {stats:?}");
+    assert_eq!(stats.substeps_used, 1);
+    assert!(stats.line_search_evals > 0);
     // A wrong-signed tangent diverges at every split: NotConverged, state untouched.
     let mut bad = StaleTangent(Pendulum::new(9.81, 1.0), -1.0);
     let before = state.clone();
@@ -823,7 +832,7 @@ fn newton_fallback_splits_steps_and_reports_failure() {
     assert!(err.to_string().contains(&format!("t = {}", before.t)));
     assert_eq!(state, before);
     // Without fallback the first case fails.
-    let mut strict = Integrator::default().with_newton(NewtonSettings { max_substeps: 1, ..NewtonSettings::default() });
+    let mut strict = Integrator::default().with_newton(NewtonSettings { max_substeps: 1, ..plain });
     let mut state = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).expect("state");
     assert!(matches!(strict.step(&mut sys, &mut state, 0.38), Err(IntegrateError::NotConverged { .. })));
 }

@@ -632,6 +632,7 @@ fn free_free_natural_frequencies_and_rigid_modes() {
             damping: 0.0,
             rest: 0.0,
             link: None,
+            law: SpringLaw::Linear,
         };
         let mut joints = vec![free(DVec3::X), free(DVec3::Y), free(DVec3::Z)];
         joints.extend(src.joints.iter().cloned());

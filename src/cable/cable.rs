@@ -1,7 +1,7 @@
 //! [`Cable`]: a rope model with its integrator state, stepped in time, with
 //! the queries users read (node positions, tension, moments, energy).
 
-use super::chain::{LinkLoad, StaticError};
+use super::chain::{LinkLoad, SpringLaw, StaticError};
 use super::spatial::V6;
 use super::rope::{RopeModel, ELEMENT_DOFS};
 use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
@@ -74,6 +74,8 @@ pub struct Cable {
     pub total_stats: StepStats,
     /// Steps taken.
     pub steps: u64,
+    /// The state at the start of the current step (restored on failure).
+    saved: State,
 }
 
 /// Internal forces of one element joint, in the element frame (x = axis).
@@ -105,6 +107,7 @@ impl Cable {
         let state = State::new(&mut model.chain, 0.0, model.q0.clone(), vec![0.0; n])?;
         let mut c = Cable {
             model,
+            saved: state.clone(),
             state,
             integrator: Integrator::new(scheme),
             last_stats: StepStats::default(),
@@ -115,10 +118,28 @@ impl Cable {
         Ok(c)
     }
 
-    /// Advances the cable by `h` seconds. On error the state is left at the
-    /// start of the step.
+    /// Advances the cable by `h` seconds. On error (Newton failure, a solve
+    /// failure, or a state that left physical sense) the state and the time
+    /// are left at the start of the step, so the results so far stay valid.
     pub fn step(&mut self, h: f64) -> Result<StepStats, CableError> {
-        let stats = self.integrator.step(&mut self.model.chain, &mut self.state, h)?;
+        self.saved.clone_from(&self.state);
+        let stats = match self.integrator.step(&mut self.model.chain, &mut self.state, h) {
+            Ok(stats) => stats,
+            Err(e) => {
+                self.state.clone_from(&self.saved);
+                self.refresh();
+                return Err(e.into());
+            }
+        };
+        if let Err(e) = self.check_sanity() {
+            let time = self.state.t;
+            self.state.clone_from(&self.saved);
+            self.refresh();
+            return Err(match e {
+                CableError::Diverged { reason, .. } => CableError::Diverged { time, reason },
+                e => e,
+            });
+        }
         self.last_stats = stats;
         self.total_stats += stats;
         self.steps += 1;
@@ -136,7 +157,6 @@ impl Cable {
         if !newton_converged || self.model.layout.free_start {
             self.refresh();
         }
-        self.check_sanity()?;
         Ok(stats)
     }
 
@@ -201,8 +221,12 @@ impl Cable {
             return Err(CableError::Diverged { time: self.state.t, reason: "non-finite state".into() });
         }
         for i in usize::from(l.free_start)..l.elements {
-            let gap = self.state.q[l.dof(i, 3)];
-            if gap.abs() > l.element_length {
+            let s = l.dof(i, 3);
+            let gap = self.state.q[s];
+            // A tension-only (slack) element may shorten freely: only its
+            // stretch is bounded.
+            let tension_only = self.model.chain.joints[s].law == SpringLaw::TensionOnly;
+            if gap > l.element_length || (!tension_only && gap < -l.element_length) {
                 return Err(CableError::Diverged {
                     time: self.state.t,
                     reason: format!("element {i} strained by {:.1} % (beyond any physical sense)", 100.0 * gap / l.element_length),

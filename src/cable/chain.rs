@@ -42,10 +42,23 @@ pub struct LinkMass {
     pub com: DVec3,
     /// Rotational inertia about the centre of mass, in the link frame, kg·m².
     pub inertia: DMat3,
+    /// Linear velocity damping, 1/s: a force `−c m v` at the centre of mass
+    /// (rapier's `Damping::linear_damping`; air drag in its simplest form).
+    /// Implicit (its tangent enters the solve).
+    pub linear_damping: f64,
+    /// Angular velocity damping, 1/s: a moment `−c I ω` (rapier's
+    /// `Damping::angular_damping`). Implicit.
+    pub angular_damping: f64,
 }
 
 impl LinkMass {
-    /// Combines two sets of mass properties given in the same frame.
+    /// Mass properties without damping.
+    pub fn new(mass: f64, com: DVec3, inertia: DMat3) -> Self {
+        LinkMass { mass, com, inertia, linear_damping: 0.0, angular_damping: 0.0 }
+    }
+
+    /// Combines two sets of mass properties given in the same frame (the
+    /// damping rates are mass-weighted).
     pub fn combine(&self, o: &LinkMass) -> LinkMass {
         let m = self.mass + o.mass;
         let com = (self.com * self.mass + o.com * o.mass) / m;
@@ -53,7 +66,13 @@ impl LinkMass {
             let d = lm.com - com;
             lm.inertia + (DMat3::from_diagonal(DVec3::splat(d.length_squared())) - super::spatial::outer3(d, d)) * lm.mass
         };
-        LinkMass { mass: m, com, inertia: shift(self) + shift(o) }
+        LinkMass {
+            mass: m,
+            com,
+            inertia: shift(self) + shift(o),
+            linear_damping: (self.linear_damping * self.mass + o.linear_damping * o.mass) / m,
+            angular_damping: (self.angular_damping * self.mass + o.angular_damping * o.mass) / m,
+        }
     }
 }
 
@@ -76,6 +95,67 @@ pub struct SubJoint {
     pub rest: f64,
     /// Mass of the link after this joint; `None` for a massless sub-link.
     pub link: Option<LinkMass>,
+    /// How the spring force depends on the coordinate: linear, or
+    /// tension-only (a wire rope's axial slide: it cannot push). After
+    /// changing it on a built chain, call [`Chain::invalidate_layout`].
+    pub law: SpringLaw,
+}
+
+/// The force law of a sub-joint's spring and damper.
+///
+/// `x = q − rest` is the spring's extension (m or rad) and `v` its rate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SpringLaw {
+    /// `f = k x + c v` for every `x` (rods, beams, shear, bending).
+    #[default]
+    Linear,
+    /// `f = k x + c v` while `x > 0`, and `f = 0` once `x ≤ 0`: a rope
+    /// carries no compression and its slack part no damping. The law has a
+    /// kink at `x = 0` (not smoothed: the force is exact); Newton uses the
+    /// one-sided tangent (`k`, `c` when taut, zero when slack) with a line
+    /// search (`integrate::NewtonSettings`).
+    TensionOnly,
+}
+
+impl SubJoint {
+    /// The spring + damper force at extension `q − rest` and rate `v`, and
+    /// its tangents `(f, ∂f/∂q, ∂f/∂v)` (N or N·m; N/m or N·m/rad; N·s/m or
+    /// N·m·s/rad).
+    #[inline]
+    pub fn spring_force(&self, q: f64, v: f64) -> (f64, f64, f64) {
+        let x = q - self.rest;
+        match self.law {
+            SpringLaw::TensionOnly if x <= 0.0 => (0.0, 0.0, 0.0),
+            _ => (self.stiffness * x + self.damping * v, self.stiffness, self.damping),
+        }
+    }
+
+    /// [`SubJoint::spring_force`] with the law held on one branch: `taut`
+    /// gives the linear law whatever the sign of the extension, slack gives
+    /// zero (what Newton solves while the branches are frozen).
+    #[inline]
+    pub fn spring_force_on_branch(&self, q: f64, v: f64, taut: bool) -> (f64, f64, f64) {
+        match self.law {
+            SpringLaw::TensionOnly if !taut => (0.0, 0.0, 0.0),
+            _ => (self.stiffness * (q - self.rest) + self.damping * v, self.stiffness, self.damping),
+        }
+    }
+
+    /// Whether the law is on its taut branch at `q` (always for a linear
+    /// law; a tension-only spring at exactly zero extension counts as taut,
+    /// so a rope laid straight and unstrained starts taut).
+    pub fn is_taut(&self, q: f64) -> bool {
+        self.law == SpringLaw::Linear || q - self.rest >= 0.0
+    }
+
+    /// Elastic energy stored at coordinate `q`, J.
+    pub fn spring_energy(&self, q: f64) -> f64 {
+        let x = q - self.rest;
+        match self.law {
+            SpringLaw::TensionOnly if x <= 0.0 => 0.0,
+            _ => 0.5 * self.stiffness * x * x,
+        }
+    }
 }
 
 /// Pose, velocity and acceleration of the chain's base frame at one instant.
@@ -194,6 +274,17 @@ pub struct LinkLoad {
     pub moment: DVec3,
 }
 
+/// The exact inputs of the link-slot layout: sub-joint count, the links of
+/// the loads then the anchors (in order), the rotation springs' first
+/// sub-joints.
+#[derive(Debug, Clone, Default)]
+struct SlotKey {
+    built: bool,
+    n: usize,
+    links: Vec<usize>,
+    springs: Vec<usize>,
+}
+
 /// Pose of a sub-joint's link, rebuilt by every kinematics pass.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Pose {
@@ -240,11 +331,22 @@ pub(crate) struct LinkScratch {
     pub hb: DMat3,
     /// Index into [`Chain::anchor_blocks`], or `u32::MAX`.
     pub anchor: u32,
+    /// Linear and angular velocity damping rates of the link's mass, 1/s.
+    pub damping: (f64, f64),
 }
 
 impl Default for LinkScratch {
     fn default() -> Self {
-        LinkScratch { ia: DMat3::ZERO, ib: DMat3::ZERO, m: 0.0, f: V6::ZERO, ha: DMat3::ZERO, hb: DMat3::ZERO, anchor: u32::MAX }
+        LinkScratch {
+            ia: DMat3::ZERO,
+            ib: DMat3::ZERO,
+            m: 0.0,
+            f: V6::ZERO,
+            ha: DMat3::ZERO,
+            hb: DMat3::ZERO,
+            anchor: u32::MAX,
+            damping: (0.0, 0.0),
+        }
     }
 }
 
@@ -300,7 +402,7 @@ pub struct Chain {
     /// entry per anchored link.
     pub(crate) anchor_blocks: Vec<(M6, M6)>,
     /// What `link_slot`, `links`, `block` and `spring_order` were built for.
-    slot_signature: Option<(usize, usize, usize, usize)>,
+    slot_key: SlotKey,
     /// Newton tolerance on the coordinate corrections, m or rad (default
     /// 1e-9: a thousandth of a 2 cm steel element's stretch under load).
     /// 1e-8 saves 7 % of the Newton iterations on a 1 000-element swing
@@ -317,6 +419,12 @@ pub struct Chain {
     /// Composite load on the whole chain at the last residual (spatial
     /// force about `origin`).
     base_load: V6,
+    /// Per sub-joint: the frozen branch of a non-smooth law (1 taut, 0
+    /// slack) while `frozen` (see [`SecondOrderSystem::freeze_branches`]).
+    branch: Vec<u8>,
+    frozen: bool,
+    /// Sub-joints with a non-smooth law (rebuilt with the layout).
+    nonsmooth: Vec<u32>,
 }
 
 impl std::fmt::Debug for Chain {
@@ -344,13 +452,16 @@ impl Chain {
             link_slot: vec![u32::MAX; n],
             links: Vec::new(),
             anchor_blocks: Vec::new(),
-            slot_signature: None,
+            slot_key: SlotKey::default(),
             max_frequency: None,
             position_tolerance: 1e-9,
             poses: vec![Pose::default(); n],
             rows: vec![Row::default(); n],
             base_pose: (DMat3::IDENTITY, DVec3::ZERO),
             base_load: V6::ZERO,
+            branch: Vec::new(),
+            frozen: false,
+            nonsmooth: Vec::new(),
         }
     }
 
@@ -358,18 +469,29 @@ impl Chain {
     /// (called by every residual evaluation; allocation-free once sized).
     fn assign_slots(&mut self) {
         let n = self.joints.len();
-        // The layout only changes with the loads, anchors and springs: skip
-        // the rebuild when their signature is unchanged.
-        let signature = (
-            n,
-            self.loads.iter().fold(self.loads.len(), |acc, l| acc.wrapping_mul(31).wrapping_add(l.link)),
-            self.anchors.iter().fold(self.anchors.len(), |acc, a| acc.wrapping_mul(31).wrapping_add(a.link)),
-            self.rotation_springs.iter().fold(self.rotation_springs.len(), |acc, r| acc.wrapping_mul(31).wrapping_add(r.first)),
-        );
-        if self.slot_signature == Some(signature) && self.poses.len() == n {
+        // The layout only changes with the links that carry loads or
+        // anchors and with the rotation springs: skip the rebuild when they
+        // are exactly those of the last build (an exact key: a hash of the
+        // indices collided, e.g. loads on links {0, 40} and {1, 9}).
+        let key = &self.slot_key;
+        let same = key.built
+            && key.n == n
+            && self.poses.len() == n
+            && key.links.len() == self.loads.len() + self.anchors.len()
+            && key.springs.len() == self.rotation_springs.len()
+            && key.links.iter().copied().eq(self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)))
+            && key.springs.iter().copied().eq(self.rotation_springs.iter().map(|r| r.first));
+        if same {
             return;
         }
-        self.slot_signature = Some(signature);
+        self.slot_key.built = true;
+        self.slot_key.n = n;
+        self.slot_key.links.clear();
+        self.slot_key.links.extend(self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)));
+        self.slot_key.springs.clear();
+        self.slot_key.springs.extend(self.rotation_springs.iter().map(|r| r.first));
+        self.nonsmooth.clear();
+        self.nonsmooth.extend((0..n as u32).filter(|&s| self.joints[s as usize].law != SpringLaw::Linear));
         self.poses.resize(n, Pose::default());
         self.rows.resize(n, Row::default());
         self.link_slot.clear();
@@ -412,6 +534,15 @@ impl Chain {
         self.spring_order.clear();
         self.spring_order.extend((0..self.rotation_springs.len() as u32).filter(|&k| self.rotation_springs[k as usize].first + 2 < n));
         self.spring_order.sort_by_key(|&k| self.rotation_springs[k as usize].first);
+    }
+
+    /// Forces the per-link layout (link slots, rotation-spring blocks, the
+    /// list of non-smooth laws) to be rebuilt at the next evaluation. Loads,
+    /// anchors, springs and the number of sub-joints are checked every time;
+    /// call this after changing a [`SubJoint::law`] or a link's mass
+    /// presence on a built chain.
+    pub fn invalidate_layout(&mut self) {
+        self.slot_key.built = false;
     }
 
     /// Number of sub-joints (= generalized coordinates).
@@ -469,9 +600,14 @@ impl Chain {
             self.poses[s] = Pose { rot, pos, vel };
             let row = &mut self.rows[s];
             row.s = sv;
-            row.stiffness = j.stiffness;
-            row.damping = j.damping;
-            row.elastic = j.stiffness * (q[s] - j.rest) + j.damping * v[s];
+            let (elastic, stiffness, damping) = if self.frozen && j.law != SpringLaw::Linear {
+                j.spring_force_on_branch(q[s], v[s], self.branch[s] != 0)
+            } else {
+                j.spring_force(q[s], v[s])
+            };
+            row.stiffness = stiffness;
+            row.damping = damping;
+            row.elastic = elastic;
             let slot = self.link_slot[s];
             if slot != u32::MAX {
                 let ls = &mut self.links[slot as usize];
@@ -484,8 +620,13 @@ impl Chain {
                     let vc = vel.bot + w.cross(c);
                     let alpha = acc.top;
                     let ac = acc.bot + alpha.cross(c) + w.cross(vc);
-                    let force = (self.gravity - ac) * lm.mass;
-                    let moment = -(ic * alpha + w.cross(ic * w));
+                    let mut force = (self.gravity - ac) * lm.mass;
+                    let mut moment = -(ic * alpha + w.cross(ic * w));
+                    if lm.linear_damping != 0.0 || lm.angular_damping != 0.0 {
+                        force -= vc * (lm.linear_damping * lm.mass);
+                        moment -= ic * w * lm.angular_damping;
+                        ls.damping = (lm.linear_damping, lm.angular_damping);
+                    }
                     ls.f = V6::new(c.cross(force) + moment, force);
                     ls.add_point_load_tangent(force, c);
                     let cx = skew(c);
@@ -774,7 +915,7 @@ impl Chain {
             let theta = rotation_deviation(rs, &self.joints, q).0;
             e += 0.5 * theta.dot(rs.k * theta);
         }
-        e + self.joints.iter().zip(q).zip(&coupled).filter(|(_, c)| !**c).map(|((j, qs), _)| 0.5 * j.stiffness * (qs - j.rest).powi(2)).sum::<f64>()
+        e + self.joints.iter().zip(q).zip(&coupled).filter(|(_, c)| !**c).map(|((j, qs), _)| j.spring_energy(*qs)).sum::<f64>()
     }
 
     /// The moment (N·m, world frame) carried by the three revolute
@@ -786,10 +927,7 @@ impl Chain {
     /// point. The axes are those of the last kinematics pass (current after
     /// [`Chain::residual_into`] at `q`). Zero if the axes are degenerate.
     pub fn joint_moment(&self, first: usize, q: &[f64], v: &[f64]) -> DVec3 {
-        let linear = |s: usize| {
-            let j = &self.joints[s];
-            j.stiffness * (q[s] - j.rest) + j.damping * v[s]
-        };
+        let linear = |s: usize| self.joints[s].spring_force(q[s], v[s]).0;
         let forces = match self.rotation_springs.binary_search_by_key(&first, |r| r.first) {
             Ok(k) => rotation_spring_forces(&self.rotation_springs[k], &self.joints, q, v).0,
             Err(_) => [linear(first), linear(first + 1), linear(first + 2)],
@@ -806,7 +944,7 @@ impl Chain {
     /// N·m (the rotation springs' law where they apply).
     #[cfg(test)]
     pub(crate) fn elastic_forces(&self, q: &[f64], v: &[f64]) -> Vec<f64> {
-        let mut out: Vec<f64> = self.joints.iter().enumerate().map(|(s, j)| j.stiffness * (q[s] - j.rest) + j.damping * v[s]).collect();
+        let mut out: Vec<f64> = self.joints.iter().enumerate().map(|(s, j)| j.spring_force(q[s], v[s]).0).collect();
         for rs in &self.rotation_springs {
             let (forces, _) = rotation_spring_forces(rs, &self.joints, q, v);
             out[rs.first..rs.first + 3].copy_from_slice(&forces);
@@ -900,6 +1038,38 @@ impl SecondOrderSystem for Chain {
     fn position_tolerance(&self) -> f64 {
         self.position_tolerance
     }
+    fn freeze_branches(&mut self, q: &[f64]) {
+        self.assign_slots();
+        if self.nonsmooth.is_empty() {
+            return;
+        }
+        self.branch.resize(self.joints.len(), 1);
+        for &s in &self.nonsmooth {
+            let s = s as usize;
+            self.branch[s] = u8::from(self.joints[s].is_taut(q[s]));
+        }
+        self.frozen = true;
+    }
+    fn update_branches(&mut self, q: &[f64]) -> usize {
+        if !self.frozen {
+            return 0;
+        }
+        let tol = self.position_tolerance;
+        let mut moved = 0;
+        for &s in &self.nonsmooth {
+            let s = s as usize;
+            let x = q[s] - self.joints[s].rest;
+            let b = &mut self.branch[s];
+            if (*b != 0 && x < -tol) || (*b == 0 && x > tol) {
+                *b ^= 1;
+                moved += 1;
+            }
+        }
+        moved
+    }
+    fn release_branches(&mut self) {
+        self.frozen = false;
+    }
 }
 
 /// Tip-to-base state of the articulated-body solve: the shifted
@@ -939,6 +1109,17 @@ impl AbaCarry {
         self.inertia.b += ls.ib;
         self.inertia.c += ls.ib.transpose();
         self.inertia.d += DMat3::from_diagonal(DVec3::splat(ls.m));
+        let (ld, ad) = ls.damping;
+        if ld != 0.0 || ad != 0.0 {
+            // Velocity damping −c_l m v_c, −c_a I_c ω: tangent
+            // c_l [[m c×c×ᵀ, m c×], [m c×ᵀ, m]] + c_a [[I_c, 0], [0, 0]].
+            let mcc = ls.ib * ls.ib.transpose() * (1.0 / ls.m);
+            let ic = ls.ia - mcc;
+            self.inertia.a += (mcc * ld + ic * ad) * c_v;
+            self.inertia.b += ls.ib * (ld * c_v);
+            self.inertia.c += ls.ib.transpose() * (ld * c_v);
+            self.inertia.d += DMat3::from_diagonal(DVec3::splat(ls.m * ld * c_v));
+        }
         if ls.anchor != u32::MAX {
             let (k, c) = &anchor_blocks[ls.anchor as usize];
             self.inertia.add_scaled(k, c_q);

@@ -4,7 +4,7 @@ pub mod material;
 pub use self::material::{preset, RopeSection, PRESET_NAMES};
 pub mod chain;
 pub mod spatial;
-pub use self::chain::{RotationSpring, StaticError, AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkLoad, LinkMass, SubJoint};
+pub use self::chain::{RotationSpring, StaticError, AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkLoad, LinkMass, SpringLaw, SubJoint};
 pub mod rope;
 pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeLayout, RopeModel, RopeStart};
 #[cfg(test)]

@@ -20,7 +20,7 @@
 //! spring (2GJ/L_e: the half element up to the pin); a clamp doubles the
 //! first joint's stiffnesses likewise.
 
-use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkMass, RotationSpring, SubJoint};
+use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkMass, RotationSpring, SpringLaw, SubJoint};
 use super::cable::ElementForces;
 use super::material::RopeSection;
 use glam::{DMat3, DQuat, DVec3, EulerRot};
@@ -46,6 +46,22 @@ pub enum RopeError {
     /// The initial path is unusable.
     #[error("rope path is invalid: {0}")]
     InvalidPath(String),
+    /// The initial path is longer than the rope by more than the rope can
+    /// stretch (typically a body placed farther from the anchor than the
+    /// rope length).
+    #[error(
+        "the rope's initial path is {stretch:.3} m ({:.1} %) longer than the rope ({length} m): it would start stretched beyond {:.1} % (its breaking strain, or 2 % without a breaking load); place the body within the rope length or lengthen the rope",
+        100.0 * stretch / length,
+        100.0 * limit
+    )]
+    InitialStretch {
+        /// Path length minus rope length, m.
+        stretch: f64,
+        /// Unstretched rope length, m.
+        length: f64,
+        /// The largest initial strain accepted (dimensionless).
+        limit: f64,
+    },
 }
 
 /// A rigid body that hangs on (or carries) a rope, as a lumped link of the
@@ -147,6 +163,9 @@ pub struct RopeBuilder {
     gravity: DVec3,
     end_stiffness_factor: f64,
     stress_free_shape: bool,
+    tension_only: bool,
+    linear_damping: f64,
+    angular_damping: f64,
 }
 
 /// Where things are in a rope's chain.
@@ -242,7 +261,36 @@ impl RopeBuilder {
             gravity: DVec3::new(0.0, -9.81, 0.0),
             end_stiffness_factor: 1e3,
             stress_free_shape: false,
+            tension_only: false,
+            linear_damping: 0.0,
+            angular_damping: 0.0,
         }
+    }
+    /// Velocity damping of the rope's elements, 1/s: each element feels
+    /// `−c m v` at its centre of mass (`c` = `linear`) and `−c I ω`
+    /// (`c` = `angular`), as rapier's `Damping` does for a body — the
+    /// simplest still-air drag, which lets a slack rope settle. Implicit
+    /// (its tangent enters the solve), so any rate is stable. Default 0.
+    pub fn velocity_damping(mut self, linear: f64, angular: f64) -> Self {
+        self.linear_damping = linear;
+        self.angular_damping = angular;
+        self
+    }
+    /// Whether the rope's axial law is tension-only. With `true` each
+    /// element's axial force is `EA/L_e · u + damping` while the element is
+    /// stretched (`u > 0`) and zero once it is not ([`SpringLaw::TensionOnly`]):
+    /// a slack rope neither pushes nor damps axially (bending and torsion
+    /// stay), so a payload placed closer to the anchor than the rope length
+    /// falls until the rope is taut instead of being pushed away.
+    ///
+    /// Default `false` (the linear law, which also pushes: right for rods and
+    /// beams). Tension-only is not the default yet: Newton's active set can
+    /// cycle on elements that sit at the kink (a payload released on an
+    /// unstrained rope) and slack ropes pinned at both ends do not yet
+    /// converge at the frame step (`docs/architecture.md`, "Slack").
+    pub fn tension_only(mut self, yes: bool) -> Self {
+        self.tension_only = yes;
+        self
     }
     /// Shear stiffness GA, N (default: EA, effectively rigid but finite).
     pub fn shear_stiffness(mut self, ga: f64) -> Self {
@@ -312,6 +360,8 @@ impl RopeBuilder {
         check("ei2", s.ei2, false)?;
         check("gj", s.gj, false)?;
         check("damping", self.damping, false)?;
+        check("linear_damping", self.linear_damping, false)?;
+        check("angular_damping", self.angular_damping, false)?;
         if self.segments == 0 {
             return Err(RopeError::InvalidParameter { name: "segments", value: 0.0, reason: "must be ≥ 1" });
         }
@@ -367,6 +417,14 @@ impl RopeBuilder {
             None => vec![start, start + DVec3::new(0.0, -self.length, 0.0)],
         };
         let nodes = resample(&path, n)?;
+        if !self.stress_free_shape {
+            let path_length: f64 = nodes.windows(2).map(|w| w[0].distance(w[1])).sum();
+            let limit = if s.min_breaking_load > 0.0 { s.min_breaking_load / s.ea } else { 0.02 };
+            let stretch = path_length - self.length;
+            if stretch > limit * self.length {
+                return Err(RopeError::InitialStretch { stretch, length: self.length, limit });
+            }
+        }
         if nodes[0].distance(start) > 1e-3 {
             return Err(RopeError::InvalidPath(format!(
                 "first path point {:?} is not the start anchor {:?}",
@@ -394,7 +452,11 @@ impl RopeBuilder {
         let me = rho * le;
         let it = me * (le * le / 12.0 + r * r / 4.0);
         let element_mass =
-            LinkMass { mass: me, com: DVec3::new(0.5 * le, 0.0, 0.0), inertia: DMat3::from_diagonal(DVec3::new(0.5 * me * r * r, it, it)) };
+            LinkMass {
+                linear_damping: self.linear_damping,
+                angular_damping: self.angular_damping,
+                ..LinkMass::new(me, DVec3::new(0.5 * le, 0.0, 0.0), DMat3::from_diagonal(DVec3::new(0.5 * me * r * r, it, it)))
+            };
         let mut joints = Vec::with_capacity(ELEMENT_DOFS * n + 6);
         let mut q0 = Vec::with_capacity(ELEMENT_DOFS * n + 6);
         let identity = DMat3::IDENTITY;
@@ -407,6 +469,7 @@ impl RopeBuilder {
             damping: tau * k,
             rest: 0.0,
             link,
+            law: SpringLaw::Linear,
         };
         // Root: base frame and (for a trolley) its prismatic sub-joint.
         let (base, clamp_start, parent_rot, first_offset, start_body) = match &self.start {
@@ -415,7 +478,7 @@ impl RopeBuilder {
             RopeStart::SlidingBody { body, axis, anchor, clamp } => {
                 let base = BaseMotion::Fixed(BaseState::fixed(body.rotation, body.position));
                 let mut j = spring(JointKind::Prismatic, body.rotation.transpose() * axis.normalize(), 0.0, None);
-                j.link = Some(LinkMass { mass: body.mass, com: body.com, inertia: body.inertia });
+                j.link = Some(LinkMass::new(body.mass, body.com, body.inertia));
                 joints.push(j);
                 q0.push(0.0);
                 (base, *clamp, body.rotation, *anchor, Some(BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }))
@@ -452,7 +515,10 @@ impl RopeBuilder {
             let mut jz = spring(JointKind::Revolute, DVec3::Z, kb, None);
             let jy = spring(JointKind::Revolute, DVec3::Y, kb2, None);
             let jx = spring(JointKind::Revolute, DVec3::X, kt, None);
-            let px = spring(JointKind::Prismatic, DVec3::X, s.ea / le, None);
+            let mut px = spring(JointKind::Prismatic, DVec3::X, s.ea / le, None);
+            if self.tension_only {
+                px.law = SpringLaw::TensionOnly;
+            }
             let py = spring(JointKind::Prismatic, DVec3::Y, ga / le, None);
             let pz = spring(JointKind::Prismatic, DVec3::Z, ga / le, Some(element_mass));
             let (angles, offset) = if i == 0 {
@@ -470,7 +536,6 @@ impl RopeBuilder {
                 rotation_springs.push(RotationSpring { first: joints.len(), k: DVec3::new(kt, kb2, kb), tau });
             }
             let gap = nodes[i + 1].distance(nodes[i]) - le;
-            let mut px = px;
             if self.stress_free_shape {
                 px.rest = gap;
             }
@@ -501,11 +566,7 @@ impl RopeBuilder {
             }
             RopeEnd::Body { body, anchor, clamp } => {
                 let c = rots[n - 1].transpose() * body.rotation;
-                let local = LinkMass {
-                    mass: body.mass,
-                    com: c * (body.com - *anchor),
-                    inertia: c * body.inertia * c.transpose(),
-                };
+                let local = LinkMass::new(body.mass, c * (body.com - *anchor), c * body.inertia * c.transpose());
                 if *clamp {
                     let shifted = LinkMass { com: local.com + DVec3::new(le, 0.0, 0.0), ..local };
                     let lm = joints[tip_link].link.as_ref().map(|m| m.combine(&shifted));
@@ -608,8 +669,7 @@ impl RopeModel {
         let ch = &self.chain;
         let f = |k: usize| {
             let s = l.dof(i, k);
-            let j = &ch.joints[s];
-            j.stiffness * (q[s] - j.rest) + j.damping * v[s]
+            ch.joints[s].spring_force(q[s], v[s]).0
         };
         let m = ch.link_rotation(l.element_link(i)).transpose() * ch.joint_moment(l.dof(i, 0), q, v);
         ElementForces { tension: f(3), shear: [f(4), f(5)], bending: [m.z, m.y], torsion: m.x }
@@ -647,7 +707,6 @@ impl RopeModel {
             return 0.0;
         }
         let s = self.layout.dof(i, 3);
-        let j = &self.chain.joints[s];
-        j.stiffness * (q[s] - j.rest) + j.damping * v[s]
+        self.chain.joints[s].spring_force(q[s], v[s]).0
     }
 }

@@ -45,6 +45,12 @@ pub struct StepStats {
     pub solves: usize,
     /// Sub-steps of the accepted step (1 unless split).
     pub substeps_used: u64,
+    /// Extra residual + solve passes of the Newton line search (included
+    /// in `residual_evals` and `solves`, not in `newton_iterations`).
+    pub line_search_evals: usize,
+    /// Branch updates of non-smooth laws (a slack element going taut, or
+    /// the reverse) inside Newton solves.
+    pub branch_updates: usize,
 }
 
 impl AddAssign for StepStats {
@@ -53,6 +59,8 @@ impl AddAssign for StepStats {
         self.residual_evals += o.residual_evals;
         self.solves += o.solves;
         self.substeps_used += o.substeps_used;
+        self.line_search_evals += o.line_search_evals;
+        self.branch_updates += o.branch_updates;
     }
 }
 
@@ -67,6 +75,8 @@ pub(crate) struct Workspace {
     pub x: Vec<f64>,
     pub r: Vec<f64>,
     pub dx: Vec<f64>,
+    /// The previous Newton correction (line search).
+    pub dx_prev: Vec<f64>,
     pub zeros: Vec<f64>,
     pub sq: Vec<f64>,
     pub sv: Vec<f64>,
@@ -89,7 +99,7 @@ impl Workspace {
         }
         let vectors = [
             &mut self.qb, &mut self.vb, &mut self.q, &mut self.v, &mut self.x, &mut self.r,
-            &mut self.dx, &mut self.sq, &mut self.sv, &mut self.sa, &mut self.dq_sum,
+            &mut self.dx, &mut self.dx_prev, &mut self.sq, &mut self.sv, &mut self.sa, &mut self.dq_sum,
             &mut self.dv_sum, &mut self.a_prev,
         ];
         for x in vectors.into_iter().chain(self.backup.iter_mut()) {

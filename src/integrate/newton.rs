@@ -26,11 +26,20 @@ pub struct NewtonSettings {
     /// [`position_tolerance`](SecondOrderSystem::position_tolerance).
     /// Default 1e-12 (dimensionless).
     pub relative_tolerance: f64,
+    /// Line search along each Newton correction (default `true`): when the
+    /// full correction overshoots the minimum of the step's incremental
+    /// potential along its direction (the directional derivative
+    /// `r(x + dx)·dx` changes sign and keeps more than half its size), the
+    /// step is cut back by regula falsi. Needed for non-smooth laws (a slack
+    /// rope's tension-only elements, where the tangent of the slack side
+    /// sends a full correction deep into the taut side); free when the full
+    /// step is good (the residual at the new iterate is computed anyway).
+    pub line_search: bool,
 }
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        NewtonSettings { max_iterations: 8, max_substeps: 8, relative_tolerance: 1e-12 }
+        NewtonSettings { max_iterations: 8, max_substeps: 8, relative_tolerance: 1e-12, line_search: true }
     }
 }
 
@@ -68,7 +77,45 @@ pub(crate) struct Affine {
 /// `one_shot` exactly one correction is made and no convergence is tested.
 /// On success `ws.x` is the solution and `ws.q`, `ws.v` the matching
 /// coordinates and velocities.
+///
+/// Non-smooth laws (tension-only rope elements) are solved by an active
+/// set: Newton runs on the branches frozen at the starting point
+/// ([`SecondOrderSystem::freeze_branches`]); once it converges, every law
+/// whose branch disagrees with the solution changes branch and Newton goes
+/// on, with a fresh iteration budget, up to [`MAX_BRANCH_UPDATES`] times.
 pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
+    sys: &mut S,
+    ws: &mut Workspace,
+    map: Affine,
+    settings: &NewtonSettings,
+    one_shot: bool,
+    stats: &mut StepStats,
+) -> Result<(), Failure> {
+    update_coordinates(ws, map.c_q, map.c_v);
+    sys.freeze_branches(&ws.q);
+    let mut result = iterate(sys, ws, map, settings, one_shot, stats);
+    if !one_shot {
+        // Branch updates until the branches agree with the solution; if they
+        // still disagree after the last update (a law sitting at its kink
+        // can make the active set cycle), the solution on the frozen
+        // branches is kept: the disagreeing laws change branch at the next
+        // step (an active set frozen for one step).
+        let mut updates = 0;
+        while result.is_ok() && updates < MAX_BRANCH_UPDATES && sys.update_branches(&ws.q) > 0 {
+            updates += 1;
+            stats.branch_updates += 1;
+            result = iterate(sys, ws, map, settings, false, stats);
+        }
+    }
+    sys.release_branches();
+    result
+}
+
+/// Most branch updates of non-smooth laws in one Newton solve.
+pub const MAX_BRANCH_UPDATES: usize = 3;
+
+/// Newton iterations on the current (frozen) laws.
+fn iterate<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     ws: &mut Workspace,
     map: Affine,
@@ -81,35 +128,88 @@ pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
     let vel_tol = tol / h;
     let rel = settings.relative_tolerance;
     let max_iterations = if one_shot { 1 } else { settings.max_iterations.max(1) };
-    let sys_err = |source| Failure::Error(IntegrateError::System { t, source });
+    let line_search = settings.line_search && !one_shot;
+    // The directional derivative `g(0) = r(x₀)·dx` of the last full step.
+    let mut pending: Option<f64> = None;
     for _ in 0..max_iterations {
         update_coordinates(ws, c_q, c_v);
-        sys.residual_and_correction(t, &ws.q, &ws.v, &ws.x, c_v, c_q, &mut ws.r, &mut ws.dx).map_err(sys_err)?;
-        stats.residual_evals += 1;
-        if !ws.r.iter().all(|x| x.is_finite()) {
-            return Err(IntegrateError::NonFinite { t }.into());
-        }
-        stats.solves += 1;
+        pass(sys, ws, map, stats)?;
         stats.newton_iterations += 1;
+        if let Some(g0) = pending.take() {
+            // `ws.r` holds −r at x = x₀ + dx_prev.
+            let g1 = -dot(&ws.r, &ws.dx_prev);
+            if g0 < 0.0 && g1 > 0.5 * g0.abs() {
+                // Overshoot: regula falsi on g(α) = r(x₀ + α dx)·dx over
+                // [0, 1], a few evaluations, each a fused pass (the last one
+                // accepted leaves its own correction in ws.dx).
+                let (mut lo, mut g_lo, mut hi, mut g_hi) = (0.0f64, g0, 1.0f64, g1);
+                let mut alpha = 1.0;
+                for _ in 0..4 {
+                    let width = hi - lo;
+                    let next = (lo - g_lo * width / (g_hi - g_lo)).clamp(lo + 0.05 * width, hi - 0.05 * width);
+                    for (xi, d) in ws.x.iter_mut().zip(&ws.dx_prev) {
+                        *xi += (next - alpha) * d;
+                    }
+                    alpha = next;
+                    update_coordinates(ws, c_q, c_v);
+                    pass(sys, ws, map, stats)?;
+                    stats.line_search_evals += 1;
+                    let g = -dot(&ws.r, &ws.dx_prev);
+                    if g.abs() <= 0.5 * g0.abs() {
+                        break;
+                    }
+                    if g > 0.0 {
+                        (hi, g_hi) = (alpha, g);
+                    } else {
+                        (lo, g_lo) = (alpha, g);
+                    }
+                }
+            }
+        }
         let mut converged = true;
         for i in 0..ws.x.len() {
             let d = ws.dx[i];
             if !d.is_finite() {
                 return Err(IntegrateError::NonFinite { t }.into());
             }
-            ws.x[i] += d;
             let dq = (c_q * d).abs();
             let dv = (c_v * d).abs();
             if dq > tol + rel * ws.q[i].abs() || dv > vel_tol + rel * ws.v[i].abs() {
                 converged = false;
             }
         }
+        for (xi, d) in ws.x.iter_mut().zip(&ws.dx) {
+            *xi += d;
+        }
         if one_shot || converged {
             update_coordinates(ws, c_q, c_v);
             return Ok(());
         }
+        if line_search {
+            // g(0) = r(x₀)·dx (negative for a descent direction).
+            pending = Some(-dot(&ws.r, &ws.dx));
+            std::mem::swap(&mut ws.dx, &mut ws.dx_prev);
+        }
     }
     Err(Failure::NotConverged { iterations: max_iterations })
+}
+
+/// One fused residual + correction pass at the current `ws.q`, `ws.v`,
+/// `ws.x`: `ws.r = −r`, `ws.dx` the correction.
+fn pass<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, map: Affine, stats: &mut StepStats) -> Result<(), Failure> {
+    let Affine { t, c_q, c_v, .. } = map;
+    sys.residual_and_correction(t, &ws.q, &ws.v, &ws.x, c_v, c_q, &mut ws.r, &mut ws.dx)
+        .map_err(|source| Failure::Error(IntegrateError::System { t, source }))?;
+    stats.residual_evals += 1;
+    stats.solves += 1;
+    if !ws.r.iter().all(|x| x.is_finite()) {
+        return Err(IntegrateError::NonFinite { t }.into());
+    }
+    Ok(())
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 fn update_coordinates(ws: &mut Workspace, c_q: f64, c_v: f64) {

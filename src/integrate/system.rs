@@ -106,4 +106,21 @@ pub trait SecondOrderSystem {
     fn position_tolerance(&self) -> f64 {
         1e-10
     }
+
+    /// Non-smooth laws (a slack rope's tension-only elements; contact
+    /// next): freeze each law on the branch it is on at `q` (taut or slack),
+    /// so that Newton solves a smooth system. Called by the implicit
+    /// schemes at the start of each Newton solve. Default: nothing to freeze.
+    fn freeze_branches(&mut self, _q: &[f64]) {}
+
+    /// After Newton converged on the frozen branches: moves every law whose
+    /// branch disagrees with `q` (beyond the position tolerance) to the
+    /// other branch and returns how many moved (0: the converged point
+    /// solves the exact, non-smooth equations). Default 0.
+    fn update_branches(&mut self, _q: &[f64]) -> usize {
+        0
+    }
+
+    /// Back to the exact laws (end of the Newton solve). Default: nothing.
+    fn release_branches(&mut self) {}
 }
