@@ -74,8 +74,6 @@ pub struct Cable {
     pub total_stats: StepStats,
     /// Steps taken.
     pub steps: u64,
-    /// The state at the start of the current step (restored on failure).
-    saved: State,
 }
 
 /// Internal forces of one element joint, in the element frame (x = axis).
@@ -107,7 +105,6 @@ impl Cable {
         let state = State::new(&mut model.chain, 0.0, model.q0.clone(), vec![0.0; n])?;
         let mut c = Cable {
             model,
-            saved: state.clone(),
             state,
             integrator: Integrator::new(scheme),
             last_stats: StepStats::default(),
@@ -122,23 +119,19 @@ impl Cable {
     /// failure, or a state that left physical sense) the state and the time
     /// are left at the start of the step, so the results so far stay valid.
     pub fn step(&mut self, h: f64) -> Result<StepStats, CableError> {
-        self.saved.clone_from(&self.state);
+        // The integrator restores the state itself when it fails; the sanity
+        // check's rejection undoes the step through it as well.
         let stats = match self.integrator.step(&mut self.model.chain, &mut self.state, h) {
             Ok(stats) => stats,
             Err(e) => {
-                self.state.clone_from(&self.saved);
                 self.refresh();
                 return Err(e.into());
             }
         };
         if let Err(e) = self.check_sanity() {
-            let time = self.state.t;
-            self.state.clone_from(&self.saved);
+            self.integrator.undo_step(&mut self.state);
             self.refresh();
-            return Err(match e {
-                CableError::Diverged { reason, .. } => CableError::Diverged { time, reason },
-                e => e,
-            });
+            return Err(e);
         }
         self.last_stats = stats;
         self.total_stats += stats;

@@ -123,11 +123,7 @@ impl SubJoint {
     /// N·m·s/rad).
     #[inline]
     pub fn spring_force(&self, q: f64, v: f64) -> (f64, f64, f64) {
-        let x = q - self.rest;
-        match self.law {
-            SpringLaw::TensionOnly if x <= 0.0 => (0.0, 0.0, 0.0),
-            _ => (self.stiffness * x + self.damping * v, self.stiffness, self.damping),
-        }
+        self.spring_force_on_branch(q, v, q - self.rest > 0.0)
     }
 
     /// [`SubJoint::spring_force`] with the law held on one branch: `taut`

@@ -218,6 +218,14 @@ impl Integrator {
         }
     }
 
+    /// Puts `state` back where it was at the start of the last
+    /// [`step`](Self::step) call (time included): for a caller that rejects
+    /// a step the integrator accepted (a cable whose element stretched past
+    /// its length).
+    pub fn undo_step(&self, state: &mut State) {
+        self.ws.restore(state);
+    }
+
     fn step_explicit<S: SecondOrderSystem + ?Sized>(
         &mut self,
         sys: &mut S,
