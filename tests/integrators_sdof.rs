@@ -816,6 +816,21 @@ fn newton_fallback_splits_steps_and_reports_failure() {
     let stats = integ.step(&mut sys, &mut state, 0.38).expect("fallback");
     println!("stale tangent, h = 0.38: {stats:?}");
     assert!(stats.substeps_used > 1);
+    // The split is kept for the next steps (no failed attempt first), and
+    // halved back after CALM_STEPS steps that converge easily.
+    let split = stats.substeps_used;
+    let mut probe = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).expect("state");
+    let mut remembering = Integrator::default().with_newton(plain.clone());
+    remembering.step(&mut sys, &mut probe, 0.38).expect("fallback");
+    let next = remembering.step(&mut sys, &mut probe, 0.01).expect("small step");
+    assert_eq!(next.substeps_used, split, "{next:?}");
+    let mut splits = vec![];
+    for _ in 0..20 {
+        splits.push(remembering.step(&mut sys, &mut probe, 0.01).expect("small step").substeps_used);
+    }
+    println!("splits after the fallback: {split}, then {splits:?}");
+    assert_eq!(*splits.last().unwrap(), 1);
+    assert!(splits.windows(2).all(|w| w[1] <= w[0]));
     // The line search shortens the overshooting corrections of the stale
     // tangent: one step, no split.
     let mut searched = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).expect("state");
@@ -828,7 +843,7 @@ fn newton_fallback_splits_steps_and_reports_failure() {
     let before = state.clone();
     let err = integ.step(&mut bad, &mut state, 0.01).expect_err("diverges");
     println!("wrong tangent: {err}");
-    assert!(matches!(err, IntegrateError::NotConverged { substeps: 8, .. } | IntegrateError::NonFinite { .. }));
+    assert!(matches!(err, IntegrateError::NotConverged { substeps: 256, .. } | IntegrateError::NonFinite { .. }), "{err:?}");
     assert!(err.to_string().contains(&format!("t = {}", before.t)));
     assert_eq!(state, before);
     // Without fallback the first case fails.

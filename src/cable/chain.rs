@@ -1066,6 +1066,59 @@ impl SecondOrderSystem for Chain {
     fn release_branches(&mut self) {
         self.frozen = false;
     }
+    fn nonlinear_update(&mut self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) -> bool {
+        // Only a chain closed by anchor springs needs it (an open chain's
+        // tip is free, and the plain sum costs nothing).
+        if self.anchors.is_empty() {
+            return false;
+        }
+        self.link_update(q, dx, scale, out);
+        true
+    }
+}
+
+impl Chain {
+    /// A Newton correction `dq = scale·dx` applied link by link: each
+    /// sub-link is moved by its own linearised motion `δX_s = Σ_{j≤s} S_j dq_j` (a rotation
+    /// `exp(ω)` and the displacement `v + ω × p` of its origin), and the
+    /// new coordinates are read back from the moved links, base to tip
+    /// (a revolute sub-joint takes the rotation about its axis that is
+    /// left, a slide the distance along its axis). To first order this is
+    /// `q + dq`; the second-order error of a rotation far up the chain is
+    /// no longer carried to the tip (where a stiff anchor spring turns it
+    /// into a huge force) but left as a small local stretch of each
+    /// element. Uses the poses and motion subspaces of the last kinematics
+    /// pass, which must have been at `q`.
+    pub(crate) fn link_update(&self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) {
+        let (mut prev_rot, mut prev_pos) = self.base_pose;
+        let mut tw = V6::ZERO;
+        for (s, j) in self.joints.iter().enumerate() {
+            let dq = scale * dx[s];
+            tw = tw + self.rows[s].s * dq;
+            let pose = &self.poses[s];
+            let w = tw.top;
+            let rj = if j.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * j.pre_rotation };
+            let pj = if j.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * j.offset };
+            let aw = rj * j.axis;
+            match j.kind {
+                JointKind::Revolute => {
+                    let target = DMat3::from_quat(DQuat::from_scaled_axis(w)) * pose.rot;
+                    let lin = q[s] + dq;
+                    let r_lin = rj * DMat3::from_axis_angle(j.axis, lin);
+                    let e = rotation_vector(&(target * r_lin.transpose()));
+                    out[s] = lin + e.dot(aw);
+                    prev_rot = rj * DMat3::from_axis_angle(j.axis, out[s]);
+                    prev_pos = pj;
+                }
+                JointKind::Prismatic => {
+                    let target = pose.pos + tw.bot + w.cross(pose.pos);
+                    out[s] = aw.dot(target - pj);
+                    prev_rot = rj;
+                    prev_pos = pj + aw * out[s];
+                }
+            }
+        }
+    }
 }
 
 /// Tip-to-base state of the articulated-body solve: the shifted

@@ -221,3 +221,57 @@ fn fused_and_separate_solves_agree() {
     assert!(rhs.iter().zip(&b).all(|(a, b)| a == b));
     assert!(diff <= 1e-12 * scale, "fused and separate corrections differ by {diff:e} (scale {scale:e})");
 }
+
+/// The link-by-link Newton update (`Chain::link_update`) is `q + dq` to
+/// first order: its deviation shrinks as |dq|² (halving dq divides it by
+/// about 4), it is exact for dq = 0, and it keeps every link where its
+/// linearised motion puts it (so the anchored tip of a long chain moves by
+/// the predicted amount, while the plain sum misses by the lever's
+/// second-order term).
+#[test]
+fn link_update_agrees_with_the_sum_to_first_order() {
+    let end = bent_path().last().copied().unwrap();
+    let mut model = RopeBuilder::new(1.8, 12, soft_section(), 0.02)
+        .path(bent_path())
+        .end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO))))
+        .build()
+        .unwrap();
+    let n = model.chain.len();
+    let mut rng = Lcg(7);
+    let q: Vec<f64> = model.q0.iter().map(|x| x + 0.02 * rng.next()).collect();
+    let dir: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+    let zero = vec![0.0; n];
+    let mut r = vec![0.0; n];
+    model.chain.residual_into(0.0, &q, &zero, &zero, &mut r).unwrap();
+    let mut out = vec![0.0; n];
+    model.chain.link_update(&q, &zero, 1.0, &mut out);
+    let same = q.iter().zip(&out).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    assert!(same < 1e-14, "{same}");
+    let deviation = |eps: f64, out: &mut [f64]| {
+        model.chain.link_update(&q, &dir, eps, out);
+        q.iter().zip(&dir).zip(out.iter()).fold(0.0f64, |m, ((a, d), b)| m.max((a + eps * d - b).abs()))
+    };
+    let d1 = deviation(1e-2, &mut out);
+    let d2 = deviation(5e-3, &mut out);
+    println!("link update vs q + dq: {d1:.3e} at |dq| = 1e-2, {d2:.3e} at 5e-3 (ratio {:.2})", d1 / d2);
+    assert!(d1 > 0.0 && (3.5..4.5).contains(&(d1 / d2)), "{d1} {d2}");
+    // The tip (end node) lands where the linearised motion puts it.
+    let tip = |chain: &mut Chain, q: &[f64]| {
+        let mut r = vec![0.0; q.len()];
+        chain.residual_into(0.0, q, &zero, &zero, &mut r).unwrap();
+        let p = chain.poses[q.len() - 1];
+        p.pos + p.rot * DVec3::new(1.8 / 12.0, 0.0, 0.0)
+    };
+    let eps = 2e-2;
+    let p0 = tip(&mut model.chain, &q);
+    let qp: Vec<f64> = q.iter().zip(&dir).map(|(a, d)| a + 1e-7 * d).collect();
+    let rate = (tip(&mut model.chain, &qp) - p0) / 1e-7;
+    tip(&mut model.chain, &q);
+    model.chain.link_update(&q, &dir, eps, &mut out);
+    let linear = p0 + rate * eps;
+    let moved = tip(&mut model.chain, &out).distance(linear);
+    let plain: Vec<f64> = q.iter().zip(&dir).map(|(a, d)| a + eps * d).collect();
+    let summed = tip(&mut model.chain, &plain).distance(linear);
+    println!("tip off its linearised position: {moved:.2e} m (link update), {summed:.2e} m (plain sum)");
+    assert!(moved < 0.2 * summed, "{moved} {summed}");
+}

@@ -77,6 +77,8 @@ pub(crate) struct Workspace {
     pub dx: Vec<f64>,
     /// The previous Newton correction (line search).
     pub dx_prev: Vec<f64>,
+    /// The coordinates after a system's own (nonlinear) update.
+    pub q_new: Vec<f64>,
     pub zeros: Vec<f64>,
     pub sq: Vec<f64>,
     pub sv: Vec<f64>,
@@ -99,7 +101,7 @@ impl Workspace {
         }
         let vectors = [
             &mut self.qb, &mut self.vb, &mut self.q, &mut self.v, &mut self.x, &mut self.r,
-            &mut self.dx, &mut self.dx_prev, &mut self.sq, &mut self.sv, &mut self.sa, &mut self.dq_sum,
+            &mut self.dx, &mut self.dx_prev, &mut self.q_new, &mut self.sq, &mut self.sv, &mut self.sa, &mut self.dq_sum,
             &mut self.dv_sum, &mut self.a_prev,
         ];
         for x in vectors.into_iter().chain(self.backup.iter_mut()) {
@@ -150,8 +152,20 @@ pub struct Integrator {
     /// [`IntegrateError::TooManySubsteps`]. Default 1 000 000 (explicit Euler
     /// needs 1.4·10⁷ sub-steps per 1/60 s step at ω = 10⁴ rad/s).
     pub max_explicit_substeps: u64,
+    /// Adaptive split of the implicit schemes under [`Substeps::Auto`]: the
+    /// sub-steps the last step needed (1 until a step fails), and how many
+    /// steps in a row converged easily at it (after [`CALM_STEPS`] the split
+    /// is halved).
+    split: u32,
+    calm: u32,
     ws: Workspace,
 }
+
+/// Steps in a row that must converge in at most [`CALM_ITERATIONS`] Newton
+/// iterations per sub-step before the adaptive split is halved.
+pub const CALM_STEPS: u32 = 2;
+/// See [`CALM_STEPS`].
+pub const CALM_ITERATIONS: usize = 6;
 
 impl Integrator {
     /// An integrator for `scheme` with default settings.
@@ -161,6 +175,8 @@ impl Integrator {
             newton: NewtonSettings::default(),
             substeps: Substeps::Auto,
             max_explicit_substeps: 1_000_000,
+            split: 1,
+            calm: 0,
             ws: Workspace::default(),
         }
     }
@@ -280,12 +296,26 @@ impl Integrator {
         stats: &mut StepStats,
     ) -> Result<(), IntegrateError> {
         let t = state.t;
+        let auto = matches!(self.substeps, Substeps::Auto);
         let max_n = n0.saturating_mul(self.newton.max_substeps.max(1));
-        let mut n = n0;
+        // Under `Auto` a step starts at the split the last one needed (a
+        // slack rope's first whip needs fine steps for a while; retrying the
+        // full step every frame would cost a failed solve each time).
+        let mut n = if auto { self.split.clamp(n0, max_n) } else { n0 };
         loop {
+            let before = stats.newton_iterations;
             match self.try_substeps(sys, state, h, n, stats) {
                 Ok(()) => {
                     stats.substeps_used += u64::from(n);
+                    if auto {
+                        let easy = stats.newton_iterations - before <= CALM_ITERATIONS * n as usize;
+                        self.calm = if easy { self.calm + 1 } else { 0 };
+                        self.split = n;
+                        if self.calm >= CALM_STEPS && n > n0 {
+                            self.split = n / 2;
+                            self.calm = 0;
+                        }
+                    }
                     return Ok(());
                 }
                 Err(failure) => {

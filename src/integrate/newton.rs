@@ -18,7 +18,10 @@ pub struct NewtonSettings {
     pub max_iterations: usize,
     /// Largest split of a step in the fallback: a step that does not converge
     /// (or whose solve fails, or that turns non-finite) is redone as 2, 4, …
-    /// sub-steps up to this many. Default 8; 1 disables the fallback.
+    /// sub-steps up to this many. Default 256; 1 disables the fallback.
+    /// Under [`Substeps::Auto`](super::Substeps::Auto) the split is kept for
+    /// the next steps and halved again after
+    /// [`CALM_STEPS`](super::CALM_STEPS) easy ones.
     pub max_substeps: u32,
     /// Relative part of the convergence test: a coordinate's correction must
     /// stay below `tol + relative_tolerance·|q_i|` (positions) and
@@ -39,7 +42,7 @@ pub struct NewtonSettings {
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        NewtonSettings { max_iterations: 8, max_substeps: 8, relative_tolerance: 1e-12, line_search: true }
+        NewtonSettings { max_iterations: 8, max_substeps: 256, relative_tolerance: 1e-12, line_search: true }
     }
 }
 
@@ -178,9 +181,9 @@ fn iterate<S: SecondOrderSystem + ?Sized>(
                 converged = false;
             }
         }
-        for (xi, d) in ws.x.iter_mut().zip(&ws.dx) {
-            *xi += d;
-        }
+        // A correction within the tolerance gains nothing from the
+        // system's own update (its second-order part is smaller still).
+        apply_correction(sys, ws, if converged { 0.0 } else { c_q });
         if one_shot || converged {
             update_coordinates(ws, c_q, c_v);
             return Ok(());
@@ -206,6 +209,22 @@ fn pass<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, map: Aff
         return Err(IntegrateError::NonFinite { t }.into());
     }
     Ok(())
+}
+
+/// `x += dx`, or through the system's own coordinate update when it has
+/// one and `c_q > 0` (then `dx` becomes the step actually taken).
+fn apply_correction<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, c_q: f64) {
+    if c_q > 0.0 && sys.nonlinear_update(&ws.q, &ws.dx, c_q, &mut ws.q_new) {
+        for i in 0..ws.x.len() {
+            let x = (ws.q_new[i] - ws.qb[i]) / c_q;
+            ws.dx[i] = x - ws.x[i];
+            ws.x[i] = x;
+        }
+        return;
+    }
+    for (xi, d) in ws.x.iter_mut().zip(&ws.dx) {
+        *xi += d;
+    }
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {

@@ -123,4 +123,17 @@ pub trait SecondOrderSystem {
 
     /// Back to the exact laws (end of the Newton solve). Default: nothing.
     fn release_branches(&mut self) {}
+
+    /// Applies a Newton correction `dq = scale·dx` of the coordinates at `q`
+    /// in the system's own way and writes the new coordinates to `out`, or
+    /// returns `false` (leaving `out` alone) to have the plain sum `q + dq`
+    /// used (the default). Called
+    /// right after [`residual_and_correction`](Self::residual_and_correction)
+    /// at `q`. Any update that agrees with `q + dq` to first order keeps
+    /// Newton's convergence rate; a chain in relative coordinates moves each
+    /// link by its own linearised motion, so that the second-order error of
+    /// a long lever stays local.
+    fn nonlinear_update(&mut self, _q: &[f64], _dx: &[f64], _scale: f64, _out: &mut [f64]) -> bool {
+        false
+    }
 }
