@@ -9,7 +9,8 @@
 //!   the single linearly implicit step). Default: generalized-α, `ρ∞ = 0`.
 //! * [`Integrator::step`] advances a [`State`] by a step `h`; implicit
 //!   schemes run Newton on the new acceleration ([`NewtonSettings`]) and
-//!   split a failing step into 2, 4, 8 sub-steps; explicit schemes choose
+//!   split a failing step into 2, 4, … 256 sub-steps (and keep the split
+//!   for the next steps until they converge easily); explicit schemes choose
 //!   sub-steps from [`SecondOrderSystem::max_frequency`] ([`Substeps`]).
 //! * [`StepStats`] reports iterations, residuals, solves and sub-steps.
 //!
