@@ -144,6 +144,16 @@ impl SubJoint {
         self.law == SpringLaw::Linear || q - self.rest >= 0.0
     }
 
+    /// The joint frame (orientation, origin) in the frame of the parent
+    /// link at `(prev_rot, prev_pos)`: the constant pre-rotation and
+    /// offset applied, before the joint's own motion.
+    #[inline]
+    pub(crate) fn frame(&self, prev_rot: DMat3, prev_pos: DVec3) -> (DMat3, DVec3) {
+        let rj = if self.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * self.pre_rotation };
+        let pj = if self.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * self.offset };
+        (rj, pj)
+    }
+
     /// Elastic energy stored at coordinate `q`, J.
     pub fn spring_energy(&self, q: f64) -> f64 {
         let x = q - self.rest;
@@ -569,18 +579,9 @@ impl Chain {
         self.base_pose = (prev_rot, prev_pos);
         let mut next_spring = 0;
         for (s, j) in self.joints.iter().enumerate() {
-            let rj = if j.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * j.pre_rotation };
-            let pj = if j.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * j.offset };
+            let (rj, pj) = j.frame(prev_rot, prev_pos);
             // Principal axes (every rope sub-joint) are column picks.
-            let axis_id = if j.axis == DVec3::X {
-                0
-            } else if j.axis == DVec3::Y {
-                1
-            } else if j.axis == DVec3::Z {
-                2
-            } else {
-                3
-            };
+            let axis_id = axis_id(j.axis);
             let aw = match axis_id {
                 0 => rj.x_axis,
                 1 => rj.y_axis,
@@ -1097,17 +1098,16 @@ impl Chain {
             tw = tw + self.rows[s].s * dq;
             let pose = &self.poses[s];
             let w = tw.top;
-            let rj = if j.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * j.pre_rotation };
-            let pj = if j.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * j.offset };
+            let (rj, pj) = j.frame(prev_rot, prev_pos);
             let aw = rj * j.axis;
             match j.kind {
                 JointKind::Revolute => {
                     let target = DMat3::from_quat(DQuat::from_scaled_axis(w)) * pose.rot;
                     let lin = q[s] + dq;
-                    let r_lin = rj * DMat3::from_axis_angle(j.axis, lin);
+                    let r_lin = rotate_about(rj, j.axis, lin);
                     let e = rotation_vector(&(target * r_lin.transpose()));
                     out[s] = lin + e.dot(aw);
-                    prev_rot = rj * DMat3::from_axis_angle(j.axis, out[s]);
+                    prev_rot = rotate_about(rj, j.axis, out[s]);
                     prev_pos = pj;
                 }
                 JointKind::Prismatic => {
@@ -1265,7 +1265,14 @@ fn small_sin_cos(x: f64) -> (f64, f64) {
 /// `r · R(axis, angle)` for a unit axis; fast paths for the principal axes.
 #[inline]
 fn rotate_about(r: DMat3, axis: DVec3, angle: f64) -> DMat3 {
-    let id = if axis == DVec3::X {
+    rotate_about_id(r, axis_id(axis), axis, angle)
+}
+
+/// Classifies a joint axis for [`rotate_about_id`]: 0, 1, 2 for the unit
+/// x, y, z axes, 3 for any other.
+#[inline]
+fn axis_id(axis: DVec3) -> u8 {
+    if axis == DVec3::X {
         0
     } else if axis == DVec3::Y {
         1
@@ -1273,8 +1280,7 @@ fn rotate_about(r: DMat3, axis: DVec3, angle: f64) -> DMat3 {
         2
     } else {
         3
-    };
-    rotate_about_id(r, id, axis, angle)
+    }
 }
 
 /// [`rotate_about`] with the axis already classified (0, 1, 2 = x, y, z;

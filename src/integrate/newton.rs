@@ -183,7 +183,7 @@ fn iterate<S: SecondOrderSystem + ?Sized>(
         }
         // A correction within the tolerance gains nothing from the
         // system's own update (its second-order part is smaller still).
-        apply_correction(sys, ws, if converged { 0.0 } else { c_q });
+        apply_correction(sys, ws, c_q, !converged);
         if one_shot || converged {
             update_coordinates(ws, c_q, c_v);
             return Ok(());
@@ -211,10 +211,11 @@ fn pass<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, map: Aff
     Ok(())
 }
 
-/// `x += dx`, or through the system's own coordinate update when it has
-/// one and `c_q > 0` (then `dx` becomes the step actually taken).
-fn apply_correction<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, c_q: f64) {
-    if c_q > 0.0 && sys.nonlinear_update(&ws.q, &ws.dx, c_q, &mut ws.q_new) {
+/// `x += dx`, or, when `own_update` is asked for and `c_q > 0`, through
+/// the system's own coordinate update if it has one (then `dx` becomes the
+/// step actually taken).
+fn apply_correction<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, c_q: f64, own_update: bool) {
+    if own_update && c_q > 0.0 && sys.nonlinear_update(&ws.q, &ws.dx, c_q, &mut ws.q_new) {
         for i in 0..ws.x.len() {
             let x = (ws.q_new[i] - ws.qb[i]) / c_q;
             ws.dx[i] = x - ws.x[i];
