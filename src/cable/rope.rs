@@ -286,8 +286,7 @@ impl RopeBuilder {
     /// Default `false` (the linear law, which also pushes: right for rods and
     /// beams). Tension-only is not the default yet: Newton's active set can
     /// cycle on elements that sit at the kink (a payload released on an
-    /// unstrained rope) and slack ropes pinned at both ends do not yet
-    /// converge at the frame step (`docs/architecture.md`, "Slack").
+    /// unstrained rope; `docs/architecture.md`, "Slack").
     pub fn tension_only(mut self, yes: bool) -> Self {
         self.tension_only = yes;
         self
