@@ -19,14 +19,18 @@
 //! | [`cable`] | — | the rope model and its O(n) implicit solve (f64) |
 //! | [`integrate`] | — | time integrators for any second-order system |
 //!
-//! With the default feature `app` the crate also has the Bevy plugin, the
-//! rapier coupling and the `cablesim` runner.
+//! With the feature `rapier` the crate also has the coupling core
+//! ([`coupling`]: cables stepped beside rapier's sets, no Bevy) and the
+//! scenario runner `sim`; with the default feature `app`, the Bevy plugin
+//! and the `cablesim` runner, both thin adapters over the same core.
 #![warn(missing_docs)]
 
 pub mod cable;
 pub mod integrate;
 pub mod output;
 pub mod scenario;
+#[cfg(feature = "rapier")]
+pub mod coupling;
 #[cfg(feature = "rapier")]
 pub mod sim;
 #[cfg(feature = "app")]

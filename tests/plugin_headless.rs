@@ -2,8 +2,9 @@
 //! with a trolley on a rapier prismatic joint (verification-cases §5b / issue
 //! 2), mass-ratio stability, determinism.
 
+#[path = "common/plugin_app.rs"]
+mod plugin_app;
 use bevy::prelude::*;
-use bevy::time::TimeUpdateStrategy;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier_cable::cable::RopeSection;
 use bevy_rapier_cable::integrate::{DenseSystem, Integrator, Scheme, State};
@@ -12,19 +13,7 @@ use bevy_rapier_cable::plugin::*;
 const DT: f32 = 1.0 / 60.0;
 
 fn app() -> App {
-    let mut app = App::new();
-    app.add_plugins((
-        MinimalPlugins,
-        TransformPlugin,
-        RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(),
-        CablePlugin::default(),
-    ));
-    app.insert_resource(Time::<Fixed>::from_seconds(DT as f64));
-    app.insert_resource(TimestepMode::Fixed { dt: DT, substeps: 1 });
-    app.insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
-    app.finish();
-    app.cleanup();
-    app
+    plugin_app::headless_app(DT)
 }
 
 fn steel(ea: f64, mu: f64) -> RopeSection {

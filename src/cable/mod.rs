@@ -12,5 +12,4 @@ mod tangent_tests;
 #[allow(clippy::module_inception)]
 pub mod cable;
 #[cfg(feature = "rapier")]
-pub(crate) mod coupling;
 pub use self::cable::{Cable, CableError, ElementForces, LinkVelocity};

@@ -266,6 +266,11 @@ impl RopeBuilder {
             angular_damping: 0.0,
         }
     }
+
+    /// The unstretched length, m.
+    pub fn length(&self) -> f64 {
+        self.length
+    }
     /// Velocity damping of the rope's elements, 1/s: each element feels
     /// `−c m v` at its centre of mass (`c` = `linear`) and `−c I ω`
     /// (`c` = `angular`), as rapier's `Damping` does for a body — the

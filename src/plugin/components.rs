@@ -1,10 +1,9 @@
 //! Components and messages of the cable plugin.
 
-use crate::cable::{BodyInChain, Cable, RopeSection};
+use crate::cable::{BodyInChain, RopeSection};
+use crate::coupling::CoupledCable;
 use crate::integrate::Scheme;
 use bevy::prelude::*;
-use crate::cable::coupling::BodySample;
-use std::sync::{Arc, Mutex};
 
 /// Where a cable end is held.
 #[derive(Debug, Clone, PartialEq)]
@@ -74,38 +73,50 @@ impl CableDescriptor {
     }
 }
 
-/// How the plugin couples a body to a cable.
+/// How the plugin couples a body to a cable (the core's
+/// [`Role`](crate::coupling::Role), with the body's place in the chain).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum CarriedBody {
-    /// The body is a link of the cable's chain; rapier mirrors it.
+    /// The body is a link of the cable's chain (payload, hook, trolley). It
+    /// stays a dynamic rapier body: the cable solve moves it, and reads the
+    /// user's velocity writes, impulses, forces, gravity scale and damping
+    /// and rapier's contact impulses on it.
     Lumped(BodyInChain),
-    /// The body moves the cable's base (fixed or kinematic in rapier).
+    /// The body moves the cable's base or end (fixed or kinematic in rapier).
     Base,
-    /// The body is dynamic in rapier and receives the start's reaction
-    /// force (explicit exchange).
+    /// The body is dynamic in rapier (jointed, or on several cables) and
+    /// receives the start's reaction force (explicit exchange).
     Explicit,
-    /// The body is dynamic in rapier (jointed) and holds the cable's end
-    /// through the implicit anchor spring; it receives the spring's force
-    /// (explicit exchange).
+    /// The body is dynamic in rapier and holds the cable's end through the
+    /// implicit anchor spring; it receives the spring's force (explicit
+    /// exchange).
     ExplicitEnd,
 }
 
-/// The simulated cable (f64 core) and its couplings.
+/// The simulated cable (f64 core) and its couplings. Dereferences to the
+/// core's [`CoupledCable`] (`sim.cable`, `sim.failed`, …).
 #[derive(Component, Debug)]
 pub struct CableSim {
-    /// The cable.
-    pub cable: Cable,
+    /// The cable and its couplings, as the coupling core keeps them.
+    pub coupled: CoupledCable,
     /// Bodies coupled to the cable and how.
     pub bodies: Vec<(Entity, CarriedBody)>,
-    /// Samples of the bodies that move the cable's base or end target,
-    /// shared with the cable's motion closures.
-    pub(crate) samples: Vec<(Entity, Vec3, Arc<Mutex<BodySample>>)>,
-    /// A trolley absorbed as the chain's root prismatic link: its entity
-    /// (which holds the rapier `ImpulseJoint` whose motor drives it) and the
-    /// rapier joint coordinate at the chain coordinate 0, m.
-    pub(crate) rail: Option<(Entity, f64)>,
-    /// Stopped after a divergence.
-    pub failed: bool,
+    /// A trolley that is the chain's root prismatic link: its entity, which
+    /// holds the rapier `ImpulseJoint` whose motor drives it.
+    pub(crate) rail: Option<Entity>,
+}
+
+impl std::ops::Deref for CableSim {
+    type Target = CoupledCable;
+    fn deref(&self) -> &CoupledCable {
+        &self.coupled
+    }
+}
+
+impl std::ops::DerefMut for CableSim {
+    fn deref_mut(&mut self) -> &mut CoupledCable {
+        &mut self.coupled
+    }
 }
 
 /// What other systems read about a cable (f32, world frame), refreshed

@@ -15,36 +15,47 @@
 //! ## Order inside `FixedUpdate` (deterministic, documented)
 //! | set | runs | does |
 //! |---|---|---|
-//! | `PhysicsSet::SyncBackend` | bevy_rapier | creates rapier bodies, applies user changes |
+//! | `PhysicsSet::SyncBackend` | bevy_rapier | creates rapier bodies, applies user changes (velocity writes, impulses) |
 //! | [`CableSystems::Init`] | after it | builds new cables from [`CableDescriptor`]s |
-//! | [`CableSystems::ReadBodies`] | then | reads poses and velocities of the bodies the cable ends hang on |
-//! | [`CableSystems::Step`] | then | advances every cable by the fixed step (f64, O(n) implicit) |
-//! | [`CableSystems::WriteBodies`] | then, before `PhysicsSet::StepSimulation` | moves the bodies the cables carry, applies end forces to bodies rapier keeps |
-//! | `PhysicsSet::StepSimulation`, `Writeback` | bevy_rapier | rapier steps |
+//! | [`CableSystems::Step`] | then, before `PhysicsSet::StepSimulation` | the coupling core's phase 1: samples the bodies cable ends hang on, reads the carried bodies, advances every cable by the fixed step (f64, O(n) implicit), hands the carried bodies to rapier, applies end forces to the bodies rapier keeps |
+//! | `PhysicsSet::StepSimulation` | bevy_rapier | rapier steps |
+//! | [`CableSystems::WriteBodies`] | after it, before `PhysicsSet::Writeback` | the core's phase 2: contact impulses on carried bodies, carried bodies put on the cable's pose and velocity |
+//! | `PhysicsSet::Writeback` | bevy_rapier | `Transform` and `Velocity` from rapier |
 //! | [`CableSystems::Readout`] | after `Writeback` | refreshes [`CableState`] for other systems |
 //!
-//! ## Coupling
-//! * A **dynamic body at a cable's end that no joint holds** (hook, payload)
-//!   becomes a lumped link of the cable's implicit solve: the plugin turns it
-//!   into a kinematic body in rapier and moves it every step to the pose the
-//!   cable computes (so a 10 t payload on a 0.3 kg element is as stable as
-//!   the rope itself). Its [`ExternalForce`](bevy_rapier3d::prelude::ExternalForce) is applied in the cable solve.
-//! * A **dynamic body on a prismatic joint** at a cable's start (a trolley on
-//!   its rail) becomes a prismatic link of the chain in the same way; its
-//!   `ExternalForce` along the rail drives it, and so does the joint's rapier
-//!   motor (`PrismaticJointBuilder::motor_velocity`/`motor_position`, read
-//!   every step): a spring–damper `k (x_target − x) + c (v_target − v)` on
-//!   the chain's rail coordinate, implicit in the cable solve (`k`, `c` times
-//!   the trolley's mass for `MotorModel::AccelerationBased`, as rapier
-//!   scales them), or an explicit `max_force` when it would ask for more.
+//! ## Coupling (the coupling core, [`crate::coupling`], shared with `cablesim`)
+//! * A **dynamic body at a cable's end that no joint holds and no other
+//!   cable uses** (hook, payload) is a lumped link of the cable's implicit
+//!   solve (so a 10 t payload on a 0.3 kg element is as stable as the rope
+//!   itself). **It stays a dynamic rapier body**: its `RigidBody` is never
+//!   rewritten and its colliders stay in rapier. Its `ExternalForce`,
+//!   `GravityScale` and `Damping` act inside the cable solve; an
+//!   `ExternalImpulse`, a write to its `Velocity`, and the impulses of
+//!   rapier's contacts on it (a ball hitting it) are impulses `M Δv` on
+//!   the cable's link, so rope and body take them together. `LockedAxes`
+//!   on it are refused (a [`CableDiverged`] message at creation). Its
+//!   `Transform` and `Velocity` are the cable's after every step.
+//! * A **dynamic body on a prismatic joint** to a fixed body at a cable's
+//!   start (a trolley on its rail) becomes a prismatic link of the chain in
+//!   the same way; the joint's rapier motor
+//!   (`PrismaticJointBuilder::motor_velocity`/`motor_position`, read every
+//!   step) drives it inside the cable solve: a spring–damper
+//!   `k (x_target − x) + c (v_target − v)` on the chain's rail coordinate,
+//!   implicit (`k`, `c` times the trolley's mass for
+//!   `MotorModel::AccelerationBased`, as rapier scales them), or an explicit
+//!   `max_force` when it would ask for more. The motor is switched off in
+//!   rapier itself so that it does not act twice.
 //! * The carried bodies' rapier `Velocity` at creation becomes the chain's
 //!   initial rates, and before its first step a cable recomputes its
 //!   acceleration with the loads and motors then acting.
 //! * A **fixed or kinematic body** moves the cable end (the cable's base
 //!   follows its pose, velocity and the velocity change over the last step).
-//! * Any **other dynamic body** (one rapier keeps: contacts, joint graphs)
-//!   gets the end force as an impulse each step (explicit exchange; stable
-//!   while `k·h²/m` stays below ~1, with `k = EA/L_e`).
+//! * Any **other dynamic body** (one rapier keeps: joint graphs, a body on
+//!   several cables) gets the end force as an impulse each step (explicit
+//!   exchange; stable while `k·h²/m` stays below ~1, with `k = EA/L_e`).
+//!   Cables spawned in the same step are classified together: a body at the
+//!   ends of two of them is coupled explicitly to both. A cable spawned
+//!   later on a body another cable already carries is refused.
 
 mod components;
 mod systems;
@@ -58,11 +69,11 @@ use bevy_rapier3d::prelude::PhysicsSet;
 pub enum CableSystems {
     /// Builds new cables from [`CableDescriptor`]s.
     Init,
-    /// Reads the poses of the bodies cable ends hang on.
-    ReadBodies,
-    /// Advances the cables.
+    /// Advances the cables and hands carried bodies and end forces to
+    /// rapier (before rapier's step).
     Step,
-    /// Writes carried bodies and end forces back to rapier.
+    /// Puts carried bodies on the cable's state (after rapier's step,
+    /// before its writeback).
     WriteBodies,
     /// Refreshes [`CableState`] after rapier's writeback.
     Readout,
@@ -98,17 +109,14 @@ impl Plugin for CablePlugin {
         app.add_message::<CableDiverged>();
         app.configure_sets(
             FixedUpdate,
-            (CableSystems::Init, CableSystems::ReadBodies, CableSystems::Step, CableSystems::WriteBodies)
-                .chain()
-                .after(PhysicsSet::SyncBackend)
-                .before(PhysicsSet::StepSimulation),
+            (CableSystems::Init, CableSystems::Step).chain().after(PhysicsSet::SyncBackend).before(PhysicsSet::StepSimulation),
         );
+        app.configure_sets(FixedUpdate, CableSystems::WriteBodies.after(PhysicsSet::StepSimulation).before(PhysicsSet::Writeback));
         app.configure_sets(FixedUpdate, CableSystems::Readout.after(PhysicsSet::Writeback));
         app.add_systems(
             FixedUpdate,
             (
                 systems::init_cables.in_set(CableSystems::Init),
-                systems::read_bodies.in_set(CableSystems::ReadBodies),
                 systems::step_cables.in_set(CableSystems::Step),
                 systems::write_bodies.in_set(CableSystems::WriteBodies),
                 systems::readout.in_set(CableSystems::Readout),

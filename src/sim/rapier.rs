@@ -26,6 +26,8 @@ pub(crate) struct RapierBody {
     pub inertia: DMat3,
     /// Prescribed motion of a kinematic body: (motion, `position`, `rotation`).
     pub motion: Option<(Motion, DVec3, DQuat)>,
+    /// A link of a cable's chain (its state and energy are the cable's).
+    pub carried: bool,
 }
 
 /// A scenario joint kept by rapier (an impulse joint).
@@ -123,6 +125,7 @@ impl RapierWorld {
             mass,
             inertia: super::shape_inertia(&b.shape, mass),
             motion: b.motion.clone().map(|m| (m, b.position, b.rotation)),
+            carried: false,
         });
     }
 
@@ -327,7 +330,7 @@ impl RapierWorld {
     pub fn kinetic_energy(&self) -> f64 {
         self.bodies
             .iter()
-            .filter(|b| b.kind == BodyKind::Dynamic)
+            .filter(|b| b.kind == BodyKind::Dynamic && !b.carried)
             .map(|b| {
                 let (v, w) = self.velocity_of(b.handle);
                 let r = DMat3::from_quat(self.pose_of(b.handle).1);
@@ -339,7 +342,7 @@ impl RapierWorld {
 
     /// Gravitational energy −m g·x of the dynamic bodies, J.
     pub fn gravity_energy(&self, gravity: DVec3) -> f64 {
-        self.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic).map(|b| -b.mass * gravity.dot(self.pose_of(b.handle).0)).sum()
+        self.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic && !b.carried).map(|b| -b.mass * gravity.dot(self.pose_of(b.handle).0)).sum()
     }
 }
 

@@ -110,17 +110,14 @@
 //! anchors are not the same point at t = 0. Cables do not touch colliders
 //! yet (contact is a later issue).
 
-use crate::cable::{
-    BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError,
-    RopeSection, RopeStart,
-};
-use crate::integrate::{Scheme, SchemeParams, Substeps};
 use super::rapier::RapierWorld;
-use crate::cable::coupling::{follow, rail_drive, reaction, BodySample};
+use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection};
+use crate::coupling::{rail_drive, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
+use crate::integrate::{Scheme, SchemeParams, Substeps};
 use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, JointKind, Location, ProbeTarget, Quantity, Scenario, Shape};
 use glam::{DMat3, DQuat, DVec3, EulerRot};
-use std::collections::HashSet;
-use std::sync::{Arc, Mutex};
+use std::collections::HashMap;
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Why a scenario cannot be run or stopped.
@@ -238,73 +235,18 @@ pub fn shape_inertia(shape: &Shape, mass: f64) -> DMat3 {
     DMat3::from_diagonal(d)
 }
 
-/// Sample of the point `anchor` (body frame) of rapier body `h`.
-fn sample(rw: &RapierWorld, h: rapier3d::prelude::RigidBodyHandle, anchor: DVec3) -> BodySample {
-    let (p, q) = rw.pose_of(h);
-    let r = DMat3::from_quat(q);
-    let a = r * anchor;
-    let (v, w) = rw.velocity_of(h);
-    BodySample { t0: 0.0, position: p + a, rotation: r, velocity: v + w.cross(a), angular_velocity: w, acceleration: DVec3::ZERO, com: p }
-}
-
-/// Dynamic bodies that cables absorb as links of their chains: a body at
-/// the `end` of exactly one cable and of no other cable end, that no joint
-/// holds (hook, payload); a body at the `start` of exactly one cable and of
-/// no other cable end, held only by one `prismatic` joint to the world
-/// (trolley).
-fn absorbed_bodies(sc: &Scenario) -> HashSet<&str> {
-    let mut out = HashSet::new();
-    for b in sc.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
-        let on = |e: &CableEnd| matches!(e, CableEnd::Body { body, .. } if *body == b.name);
-        let starts = sc.cables.iter().filter(|c| on(&c.start)).count();
-        let ends = sc.cables.iter().filter(|c| on(&c.end)).count();
-        let joints: Vec<_> = sc.joints.iter().filter(|j| j.body1 == b.name || j.body2 == b.name).collect();
-        let absorbed = match (starts, ends, joints.as_slice()) {
-            (0, 1, []) => true,
-            (1, 0, [j]) => j.kind == JointKind::Prismatic && (j.body1 == "world" || j.body2 == "world"),
-            _ => false,
-        };
-        if absorbed {
-            out.insert(b.name.as_str());
-        }
-    }
-    out
-}
-
 fn fmt_point(p: DVec3) -> String {
     format!("[{:.4}, {:.4}, {:.4}] m", p.x, p.y, p.z)
 }
 
-/// How a cable end is coupled to a dynamic body that rapier keeps
-/// (explicit exchange, one frame lag).
+/// Names of one cable of the core and of the scenario bodies it carries.
 #[derive(Debug)]
-struct Coupling {
-    /// Index into the rapier bodies.
-    body: usize,
-    /// Anchor in the body frame, m.
-    anchor: DVec3,
-    /// `true`: the cable's start (base follows the body, the body gets
-    /// the base load); `false`: its end (anchor spring target follows the
-    /// body point, the body gets minus the spring force).
-    start: bool,
-    /// The shared sample the chain reads.
-    sample: Arc<Mutex<BodySample>>,
-    /// Impulse (N·s) and angular impulse about the body's centre (N·m·s)
-    /// collected over the frame's cable sub-steps.
-    impulse: (DVec3, DVec3),
-}
-
-/// One simulated cable and the scenario bodies it carries.
-#[derive(Debug)]
-struct SimCable {
+struct CableNames {
     name: String,
-    cable: Cable,
     /// Scenario body name → its place in the chain.
     bodies: Vec<(String, BodyInChain)>,
-    /// Prismatic joint of the start body (joint name, drive).
+    /// Prismatic joint of an absorbed trolley (joint name, drive).
     slide: Option<(String, Option<Drive>)>,
-    /// Ends on dynamic rapier bodies.
-    couplings: Vec<Coupling>,
 }
 
 /// The cables, rapier bodies and joints of a scenario, stepped together
@@ -313,7 +255,8 @@ struct SimCable {
 pub struct World {
     /// The scenario.
     pub scenario: Scenario,
-    cables: Vec<SimCable>,
+    core: Coupling,
+    names: Vec<CableNames>,
     rapier: RapierWorld,
     /// Simulation time, s.
     pub time: f64,
@@ -324,6 +267,61 @@ pub struct World {
     /// Notes about the run that are not errors: explicit couplings beyond
     /// their estimated stability limit (see the module docs).
     pub warnings: Vec<String>,
+}
+
+/// The closed-form motion of a fixed or kinematic scenario body (its
+/// frame; for a `spin`, the angular velocity and acceleration too; the
+/// origin's acceleration by a central difference of the velocity).
+fn body_motion(b: &scenario::Body) -> BodyMotion {
+    let rot = DMat3::from_quat(b.rotation);
+    match &b.motion {
+        None => {
+            let s = BaseState::fixed(rot, b.position);
+            Arc::new(move |_| s)
+        }
+        Some(m) => {
+            let (m, base, r0) = (m.clone(), b.position, b.rotation);
+            Arc::new(move |t| {
+                let eps = 1e-5;
+                BaseState {
+                    rotation: DMat3::from_quat(m.rotation_at(t) * r0),
+                    position: m.position_at(t, base),
+                    angular_velocity: m.angular_velocity_at(t),
+                    velocity: m.velocity_at(t),
+                    angular_acceleration: m.angular_acceleration_at(t),
+                    acceleration: (m.velocity_at(t + eps) - m.velocity_at(t - eps)) / (2.0 * eps),
+                }
+            })
+        }
+    }
+}
+
+/// The core's spec of a scenario cable.
+fn cable_spec(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, rapier: &RapierWorld) -> CableSpec {
+    let section = RopeSection { linear_density: c.linear_density, ea: c.ea, ei: c.ei, ei2: c.ei2, gj: c.gj, min_breaking_load: 0.0 };
+    let mut rope = RopeBuilder::new(c.length, c.segments as usize, section, c.diameter)
+        .damping(c.damping)
+        .gravity(sc.simulation.gravity)
+        .stress_free_shape(c.stress_free);
+    if let Some(ga) = c.shear_stiffness {
+        rope = rope.shear_stiffness(ga);
+    }
+    let attach = |e: &CableEnd| match e {
+        CableEnd::Free => Attach::Free,
+        CableEnd::World { point, clamp } => Attach::World { point: *point, clamp: *clamp },
+        CableEnd::Body { body, anchor, clamp } => {
+            Attach::Body { body: rapier.body(body).expect("validated: every body is a rapier body").handle, anchor: *anchor, clamp: *clamp }
+        }
+    };
+    // The scenario's exact (f64) mass properties and pose of dynamic end bodies.
+    let exact = |e: &CableEnd| match e {
+        CableEnd::Body { body, .. } => sc.body(body).filter(|b| b.kind == BodyKind::Dynamic).map(|b| {
+            let mass = b.mass.unwrap_or(0.0);
+            LumpedBody { mass, inertia: shape_inertia(&b.shape, mass), position: b.position, rotation: DMat3::from_quat(b.rotation), com: DVec3::ZERO }
+        }),
+        _ => None,
+    };
+    CableSpec { rope, path: Some(c.path.clone()), start: attach(&c.start), end: attach(&c.end), scheme: scheme.clone(), exact: [exact(&c.start), exact(&c.end)] }
 }
 
 impl World {
@@ -348,30 +346,13 @@ impl World {
         let ic = &sim.integrator;
         let params = SchemeParams { beta: ic.beta, gamma: ic.gamma, theta: ic.theta, alpha: ic.alpha, rho_inf: ic.rho_inf, w: ic.w };
         let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
-        // Dynamic bodies that become links of a cable's chain; every other
-        // body is a rapier body.
-        let absorbed = absorbed_bodies(&scenario);
-        let rail = |j: &scenario::Joint| {
-            j.kind == JointKind::Prismatic && [&j.body1, &j.body2].iter().any(|n| absorbed.contains(n.as_str()))
-        };
-        for p in &scenario.probes {
-            let ProbeTarget::Joint(name) = &p.target else { continue };
-            let Some(j) = scenario.joints.iter().find(|j| j.name == *name) else { continue };
-            if rail(j) {
-                continue;
-            }
-            if p.quantity == Quantity::Force && j.drive.is_none() {
-                return Err(unsupported(
-                    p.location,
-                    format!("probe `{}`: the `force` of joint `{name}`, which has no `drive` (the reaction force of a rapier joint; a driven joint reports its drive force)", p.name),
-                ));
-            }
-        }
+        // Every body and joint is in rapier; the core decides which bodies
+        // become links of a cable's chain.
         let mut rapier = RapierWorld::new(sim.gravity, sim.dt / sim.substeps.unwrap_or(1).max(1) as f64);
-        for b in scenario.bodies.iter().filter(|b| !absorbed.contains(b.name.as_str())) {
+        for b in &scenario.bodies {
             rapier.add_body(b);
         }
-        for j in scenario.joints.iter().filter(|j| !rail(j)) {
+        for j in &scenario.joints {
             let point = |body: &str, anchor: DVec3| scenario.body(body).map_or(anchor, |b| b.world_point(anchor));
             let (p1, p2) = (point(&j.body1, j.anchor1), point(&j.body2, j.anchor2));
             if p1.distance(p2) > 1e-3 {
@@ -390,135 +371,142 @@ impl World {
             let (h1, h2) = (handle(&j.body1), handle(&j.body2));
             rapier.add_joint(j, h1, h2, sim.dt);
         }
-        let mut cables = Vec::new();
-        for c in &scenario.cables {
-            cables.push(build_cable(&scenario, c, &scheme, &file, &absorbed, &rapier)?);
+        let motions: HashMap<_, BodyMotion> =
+            scenario.bodies.iter().filter(|b| b.kind != BodyKind::Dynamic).map(|b| (rapier.body(&b.name).expect("added").handle, body_motion(b))).collect();
+        let specs: Vec<CableSpec> = scenario.cables.iter().map(|c| cable_spec(&scenario, c, &scheme, &rapier)).collect();
+        let mut core = Coupling::new();
+        let built = core.add(&specs, &mut rapier.pw.bodies, &mut rapier.pw.impulse_joints, &motions);
+        let name_of = |rapier: &RapierWorld, h| rapier.bodies.iter().find(|b| b.handle == h).map_or("?".to_string(), |b| b.name.clone());
+        let mut names = Vec::new();
+        for (c, r) in scenario.cables.iter().zip(built) {
+            let i = r.map_err(|e| match e {
+                CouplingError::Build(source) => SimError::Build { file: file.clone(), location: c.location, cable: c.name.clone(), source },
+                CouplingError::ClampedMovingEnd { why } => {
+                    let body = match &c.end {
+                        CableEnd::Body { body, .. } => body.as_str(),
+                        _ => "?",
+                    };
+                    unsupported(c.location, if why.starts_with("a dynamic") {
+                        format!("cable `{}` with its `end` clamped to body `{body}`, which rapier keeps (a dynamic body held by joints or other cables: the end spring's orientation hold has a fixed target; clamp the `start` instead, or leave the end pinned)", c.name)
+                    } else {
+                        format!("cable `{}` with its `end` clamped to spinning body `{body}` (clamp the `start` instead)", c.name)
+                    })
+                }
+                e => SimError::Invalid { file: file.clone(), location: c.location, message: format!("cable `{}`: {e}", c.name) },
+            })?;
+            let cc = &mut core.cables[i];
+            for l in &c.loads {
+                cc.cable.add_point_load_and_moment(l.s, l.force, l.moment);
+            }
+            cc.keep_loads();
+            let bodies = cc.carried.iter().map(|cb| (name_of(&rapier, cb.body), cb.place)).collect();
+            let slide = match cc.roles[0] {
+                Some((_, Role::Trolley { joint, .. })) => {
+                    let k = rapier.joints.iter().position(|j| j.handle == joint).expect("the rail is a scenario joint");
+                    // The cable drives the rail; rapier keeps it as a joint only.
+                    let drive = rapier.joints[k].drive.take();
+                    Some((rapier.joints[k].name.clone(), drive))
+                }
+                _ => None,
+            };
+            for cb in &cc.carried {
+                if let Some(rb) = rapier.bodies.iter_mut().find(|b| b.handle == cb.body) {
+                    rb.carried = true;
+                }
+            }
+            names.push(CableNames { name: c.name.clone(), bodies, slide });
+        }
+        for p in &scenario.probes {
+            let ProbeTarget::Joint(name) = &p.target else { continue };
+            if names.iter().any(|n| n.slide.as_ref().is_some_and(|(j, _)| j == name)) {
+                continue;
+            }
+            let Some(j) = scenario.joints.iter().find(|j| j.name == *name) else { continue };
+            if p.quantity == Quantity::Force && j.drive.is_none() {
+                return Err(unsupported(
+                    p.location,
+                    format!("probe `{}`: the `force` of joint `{name}`, which has no `drive` (the reaction force of a rapier joint; a driven joint reports its drive force)", p.name),
+                ));
+            }
         }
         if sim.statics {
             // Start from the static equilibrium (gravity, loads, held ends).
             let steps = sim.static_load_steps as usize;
-            for (sc_cable, c) in scenario.cables.iter().zip(&mut cables) {
-                c.cable.solve_static(steps, STATIC_TOLERANCE, STATIC_MAX_ITERATIONS).map_err(|source| SimError::Static {
+            for ((sc_cable, cc), n) in scenario.cables.iter().zip(&mut core.cables).zip(&names) {
+                cc.cable.solve_static(steps, STATIC_TOLERANCE, STATIC_MAX_ITERATIONS).map_err(|source| SimError::Static {
                     file: file.clone(),
                     location: sc_cable.location,
-                    cable: c.name.clone(),
+                    cable: n.name.clone(),
                     source: Box::new(source),
                 })?;
             }
         }
-        // Initial velocities of the carried bodies (after the static start):
-        // the chain's rates that give every body of the cable its velocity
-        // (zero if not given) with the least stiffness energy rate
-        // ([`Cable::set_link_velocities`]).
-        for c in &mut cables {
-            let bodies: Vec<_> = c.bodies.iter().filter_map(|(name, bic)| scenario.body(name).map(|b| (b, *bic))).collect();
-            if bodies.iter().all(|(b, _)| b.linear_velocity == DVec3::ZERO && b.angular_velocity == DVec3::ZERO) {
-                continue;
-            }
-            let targets: Vec<LinkVelocity> = bodies
-                .iter()
-                .map(|(b, bic)| LinkVelocity { link: bic.link, point: bic.origin, linear: b.linear_velocity, angular: b.angular_velocity })
-                .collect();
-            if let Err(source) = c.cable.set_link_velocities(&targets) {
-                let who = match &source {
-                    CableError::Velocity { link, .. } => bodies.iter().find(|(_, bic)| bic.link == *link).map(|(b, _)| *b),
-                    _ => None,
-                }
-                .or_else(|| bodies.iter().map(|(b, _)| *b).find(|b| b.linear_velocity != DVec3::ZERO || b.angular_velocity != DVec3::ZERO))
-                .expect("a body with a velocity exists here");
-                return Err(SimError::InitialVelocity { file: file.clone(), location: who.location, body: who.name.clone(), cable: c.name.clone(), source: Box::new(source) });
+        // Initial velocities of the carried bodies (after the static start).
+        for i in 0..core.cables.len() {
+            let exact = |h| {
+                let b = scenario.body(&name_of(&rapier, h)).expect("a scenario body");
+                (b.linear_velocity, b.angular_velocity)
+            };
+            if let Err((h, source)) = core.start_velocities(i, &exact) {
+                let name = name_of(&rapier, h);
+                let who = scenario.body(&name).expect("a scenario body");
+                return Err(SimError::InitialVelocity { file: file.clone(), location: who.location, body: name, cable: names[i].name.clone(), source: Box::new(source) });
             }
         }
         let substeps = sim.substeps.unwrap_or(1);
-        for c in &mut cables {
+        for cc in &mut core.cables {
             if !scheme.is_explicit() {
-                c.cable.integrator.substeps = Substeps::Auto;
+                cc.cable.integrator.substeps = Substeps::Auto;
             }
         }
-        // Explicit couplings: estimated stability k·h²/m (k the stiffness of
-        // the element next to the body, m the body's mass).
+        // Explicit couplings: estimated stability k·h²/m.
+        let h = sim.dt / substeps as f64;
         let mut warnings = Vec::new();
-        for c in &cables {
-            let le = c.cable.model.layout.element_length;
-            let k = c.cable.model.section.ea / le;
-            for cp in &c.couplings {
-                let b = &rapier.bodies[cp.body];
-                let h = sim.dt / substeps as f64;
-                let ratio = k * h * h / b.mass;
-                if ratio > 1.0 {
-                    warnings.push(format!(
-                        "cable `{}` {} on body `{}` is coupled explicitly with k·h²/m = {ratio:.3e} > 1 (k = EA/L_e = {k:.4e} N/m, h = {h} s, m = {} kg): it may be unstable unless joints hold the body; `substeps = {}` would bring it to 1 (see docs/scenario.md \"Explicit coupling\")",
-                        c.name,
-                        if cp.start { "start" } else { "end" },
-                        b.name,
-                        b.mass,
-                        (substeps as f64 * ratio.sqrt()).ceil()
-                    ));
-                }
+        for (i, body, start, ratio) in core.explicit_ratios(&rapier.pw.bodies, h) {
+            if ratio > 1.0 {
+                let b = rapier.bodies.iter().find(|b| b.handle == body).expect("a scenario body");
+                let k = ratio * b.mass / (h * h);
+                warnings.push(format!(
+                    "cable `{}` {} on body `{}` is coupled explicitly with k·h²/m = {ratio:.3e} > 1 (k = EA/L_e = {k:.4e} N/m, h = {h} s, m = {} kg): it may be unstable unless joints hold the body; `substeps = {}` would bring it to 1 (see docs/scenario.md \"Explicit coupling\")",
+                    names[i].name,
+                    if start { "start" } else { "end" },
+                    b.name,
+                    b.mass,
+                    (substeps as f64 * ratio.sqrt()).ceil()
+                ));
             }
         }
-        Ok(World { scenario, cables, rapier, time: 0.0, steps: 0, substeps, warnings })
+        Ok(World { scenario, core, names, rapier, time: 0.0, steps: 0, substeps, warnings })
     }
 
-    /// Advances the world by one frame `dt`: samples the rapier bodies the
-    /// cables hang on, steps every cable (in `substeps` sub-steps, with its
-    /// drives), applies the cables' reactions to those bodies, then steps
-    /// rapier (see the module docs).
+    /// Advances the world by one frame `dt` in `substeps` sub-steps, each:
+    /// the trolley drives, the core's cable step, rapier's step, the core's
+    /// read-back (see the module docs).
     pub fn step(&mut self) -> Result<(), SimError> {
         let dt = self.scenario.simulation.dt;
         let h = dt / self.substeps as f64;
         let t0 = self.time;
         for k in 0..self.substeps {
             let t = t0 + k as f64 * h;
-            let first = self.steps == 0 && k == 0;
-            // 1. Sample the rapier bodies the cables are coupled to.
-            for c in &mut self.cables {
-                for cp in &mut c.couplings {
-                    let rb = &self.rapier.bodies[cp.body];
-                    let mut s = sample(&self.rapier, rb.handle, cp.anchor);
-                    s.t0 = t;
-                    // Velocities from the pose change (see BodySample::update).
-                    cp.sample.lock().unwrap_or_else(|e| e.into_inner()).update(s, (!first).then_some(h), true);
-                    cp.impulse = (DVec3::ZERO, DVec3::ZERO);
-                }
-            }
-            // 2. Step every cable with its drives; its reactions.
-            for c in &mut self.cables {
-                match &c.slide {
+            for (cc, n) in self.core.cables.iter_mut().zip(&self.names) {
+                match &n.slide {
                     Some((_, Some(Drive::Force { force }))) => {
                         // Drive force at the sub-step's midpoint.
-                        c.cable.model.chain.joint_forces[0] = force.value_at(t + 0.5 * h);
+                        cc.cable.model.chain.joint_forces[0] = force.value_at(t + 0.5 * h);
                     }
                     Some((_, Some(Drive::Velocity { velocity, max_force }))) => {
-                        velocity_motor(&mut c.cable, velocity.value_at(t + h), *max_force, h);
+                        velocity_motor(&mut cc.cable, velocity.value_at(t + h), *max_force, h);
                     }
                     _ => {}
                 }
-                let diverged = |source| SimError::Diverged { cable: c.name.clone(), time: t, source: Box::new(source) };
-                if first {
-                    // Start from the acceleration the loads and drives give
-                    // (not the force-free one of the cable's creation, which
-                    // generalized-α would carry as half a step's lag).
-                    c.cable.recompute_acceleration().map_err(diverged)?;
-                }
-                c.cable.step(h).map_err(diverged)?;
-                for cp in &mut c.couplings {
-                    let com = cp.sample.lock().unwrap_or_else(|e| e.into_inner()).com;
-                    let (f, m) = reaction(&c.cable, cp.start, com, t + h);
-                    cp.impulse = (f * h, m * h);
-                }
             }
-            // 3. Apply the reactions to the rapier bodies.
-            for c in &self.cables {
-                for cp in &c.couplings {
-                    let rb = &mut self.rapier.pw.bodies[self.rapier.bodies[cp.body].handle];
-                    rb.apply_impulse(cp.impulse.0.as_vec3(), true);
-                    rb.apply_torque_impulse(cp.impulse.1.as_vec3(), true);
-                }
+            let failures = self.core.step(&mut self.rapier.pw.bodies, &mut self.rapier.pw.impulse_joints, h, 1, &|_| BodyInputs::default());
+            if let Some((i, time, source)) = failures.into_iter().next() {
+                return Err(SimError::Diverged { cable: self.names[i].name.clone(), time, source: Box::new(source) });
             }
-            // 4. Step rapier over the sub-step (kinematic motions, joint drives).
             self.rapier.prepare_step(t, h);
             self.rapier.step().map_err(|body| SimError::BodyDiverged { body, time: t })?;
+            self.core.after_rapier(&mut self.rapier.pw.bodies, &self.rapier.pw.narrow_phase);
         }
         self.steps += 1;
         self.time = self.steps as f64 * dt;
@@ -526,21 +514,21 @@ impl World {
     }
 
     /// The cables' reactions on the dynamic rapier bodies they are coupled
-    /// to, over the last sub-step: (cable, body, `true` for the cable's
-    /// start, force N, moment about the body's centre N·m).
+    /// to explicitly, over the last sub-step: (cable, body, `true` for the
+    /// cable's start, force N, moment about the body's centre N·m).
     pub fn coupling_reactions(&self) -> Vec<(&str, &str, bool, DVec3, DVec3)> {
-        let dt = self.scenario.simulation.dt / self.substeps as f64;
-        self.cables
+        let name = |h| self.rapier.bodies.iter().find(|b| b.handle == h).map_or("?", |b| b.name.as_str());
+        self.core
+            .cables
             .iter()
-            .flat_map(|c| {
-                c.couplings.iter().map(move |cp| (c.name.as_str(), self.rapier.bodies[cp.body].name.as_str(), cp.start, cp.impulse.0 / dt, cp.impulse.1 / dt))
-            })
+            .zip(&self.names)
+            .flat_map(|(cc, n)| cc.followers.iter().filter(|f| f.dynamic).map(move |f| (n.name.as_str(), name(f.body), f.start, f.reaction.0, f.reaction.1)))
             .collect()
     }
 
     /// The cable named `name`.
     pub fn cable(&self, name: &str) -> Option<&Cable> {
-        self.cables.iter().find(|c| c.name == name).map(|c| &c.cable)
+        self.names.iter().position(|n| n.name == name).map(|i| &self.core.cables[i].cable)
     }
 
     /// Appends the current value of every probe column (file order) to `out`.
@@ -562,9 +550,9 @@ impl World {
     }
 
     fn body_state(&self, name: &str) -> (DVec3, DMat3, DVec3, DVec3) {
-        for c in &self.cables {
-            if let Some((_, b)) = c.bodies.iter().find(|(n, _)| n == name) {
-                return c.cable.model.body_state(b);
+        for (cc, n) in self.core.cables.iter().zip(&self.names) {
+            if let Some((_, b)) = n.bodies.iter().find(|(n, _)| n == name) {
+                return cc.cable.model.body_state(b);
             }
         }
         if let Some(b) = self.rapier.body(name) {
@@ -582,7 +570,7 @@ impl World {
         match &p.target {
             ProbeTarget::System => {
                 // Cables (with the bodies they carry) + rapier's dynamic bodies.
-                let e = |f: fn(&Cable) -> f64| self.cables.iter().map(|c| f(&c.cable)).sum::<f64>();
+                let e = |f: fn(&Cable) -> f64| self.core.cables.iter().map(|c| f(&c.cable)).sum::<f64>();
                 let ke = self.rapier.kinetic_energy();
                 match p.quantity {
                     Quantity::KineticEnergy => Probe::Scalar(e(Cable::kinetic_energy) + ke),
@@ -612,7 +600,7 @@ impl World {
                 }
             }
             ProbeTarget::Joint(name) => {
-                let c = self.cables.iter().find(|c| c.slide.as_ref().is_some_and(|(n, _)| n == name));
+                let c = self.names.iter().position(|n| n.slide.as_ref().is_some_and(|(j, _)| j == name)).map(|i| &self.core.cables[i]);
                 match (c, p.quantity) {
                     (Some(c), Quantity::Position) => Probe::Scalar(c.cable.state.q[0]),
                     (Some(c), Quantity::Velocity) => Probe::Scalar(c.cable.state.v[0]),
@@ -643,12 +631,12 @@ impl World {
 
     /// Names of the cables.
     pub fn cable_names(&self) -> Vec<&str> {
-        self.cables.iter().map(|c| c.name.as_str()).collect()
+        self.names.iter().map(|n| n.name.as_str()).collect()
     }
 
     /// Newton iterations, residual evaluations and solves of all cables so far.
     pub fn work(&self) -> (usize, usize) {
-        self.cables.iter().fold((0, 0), |(a, b), c| (a + c.cable.total_stats.newton_iterations, b + c.cable.total_stats.solves))
+        self.core.cables.iter().fold((0, 0), |(a, b), c| (a + c.cable.total_stats.newton_iterations, b + c.cable.total_stats.solves))
     }
 }
 
@@ -666,147 +654,4 @@ fn velocity_motor(cable: &mut Cable, target: f64, max_force: f64, h: f64) {
 enum Probe {
     Scalar(f64),
     Vector(DVec3),
-}
-
-fn lumped(b: &scenario::Body) -> LumpedBody {
-    let mass = b.mass.unwrap_or(0.0);
-    LumpedBody { mass, inertia: shape_inertia(&b.shape, mass), position: b.position, rotation: DMat3::from_quat(b.rotation), com: DVec3::ZERO }
-}
-
-/// Base motion of a point `anchor` of a fixed or kinematic body: the body
-/// frame at the anchor point, with the point's velocity and acceleration
-/// (for a `spin`: ω × r and α × r + ω × (ω × r), r the anchor's offset
-/// from the axis point, the body origin) and the body's angular velocity
-/// and acceleration.
-fn body_base(b: &scenario::Body, anchor: DVec3) -> BaseMotion {
-    let rot = DMat3::from_quat(b.rotation);
-    match &b.motion {
-        None => BaseMotion::Fixed(BaseState::fixed(rot, b.position + rot * anchor)),
-        Some(m) => {
-            let (m, base, r0) = (m.clone(), b.position, b.rotation);
-            BaseMotion::Prescribed(Arc::new(move |t| {
-                let eps = 1e-5;
-                let acc = (m.velocity_at(t + eps) - m.velocity_at(t - eps)) / (2.0 * eps);
-                let rot = DMat3::from_quat(m.rotation_at(t) * r0);
-                let r = rot * anchor;
-                let (w, al) = (m.angular_velocity_at(t), m.angular_acceleration_at(t));
-                BaseState {
-                    rotation: rot,
-                    position: m.position_at(t, base) + r,
-                    angular_velocity: w,
-                    velocity: m.velocity_at(t) + w.cross(r),
-                    angular_acceleration: al,
-                    acceleration: acc + al.cross(r) + w.cross(w.cross(r)),
-                }
-            }))
-        }
-    }
-}
-
-fn build_cable(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, file: &str, absorbed: &HashSet<&str>, rapier: &RapierWorld) -> Result<SimCable, SimError> {
-    let unsupported = |what: String| SimError::Unsupported { file: file.to_string(), location: c.location, what };
-    let section = RopeSection {
-        linear_density: c.linear_density,
-        ea: c.ea,
-        ei: c.ei,
-        ei2: c.ei2,
-        gj: c.gj,
-        min_breaking_load: 0.0,
-    };
-    let mut builder = RopeBuilder::new(c.length, c.segments as usize, section, c.diameter)
-        .damping(c.damping)
-        .gravity(sc.simulation.gravity)
-        .path(c.path.clone())
-        .stress_free_shape(c.stress_free);
-    if let Some(ga) = c.shear_stiffness {
-        builder = builder.shear_stiffness(ga);
-    }
-    let mut bodies = Vec::new();
-    let mut slide = None;
-    let mut couplings = Vec::new();
-    // A coupling to rapier body `name` (a dynamic body no cable absorbs).
-    let mut couple = |name: &str, anchor: DVec3, start: bool| {
-        let body = rapier.bodies.iter().position(|b| b.name == name).expect("non-absorbed bodies are rapier bodies");
-        let shared = Arc::new(Mutex::new(sample(rapier, rapier.bodies[body].handle, anchor)));
-        couplings.push(Coupling { body, anchor, start, sample: shared.clone(), impulse: (DVec3::ZERO, DVec3::ZERO) });
-        follow(shared)
-    };
-    builder = match &c.start {
-        CableEnd::Free => builder.start(RopeStart::Free),
-        CableEnd::World { point, clamp } => {
-            let base = BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, *point));
-            builder.start(if *clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) })
-        }
-        CableEnd::Body { body, anchor, clamp } => {
-            let b = sc.body(body).expect("validated");
-            if b.kind == BodyKind::Dynamic && !absorbed.contains(body.as_str()) {
-                // Explicit base: follows the rapier body, which gets the base load.
-                let base = couple(body, *anchor, true);
-                builder.start(if *clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) })
-            } else if b.kind == BodyKind::Dynamic {
-                let j = sc.joints.iter().find(|j| j.body1 == *body || j.body2 == *body).expect("an absorbed start body has its rail");
-                let axis = j.axis.unwrap_or(DVec3::X);
-                slide = Some((j.name.clone(), j.drive.clone()));
-                bodies.push((body.clone(), BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
-                builder.start(RopeStart::SlidingBody { body: lumped(b), axis, anchor: *anchor, clamp: *clamp })
-            } else {
-                let base = body_base(b, *anchor);
-                builder.start(if *clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) })
-            }
-        }
-    };
-    builder = match &c.end {
-        CableEnd::Free => builder,
-        CableEnd::World { point, clamp } => {
-            let p = *point;
-            let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |_| (p, DVec3::ZERO));
-            builder.end(if *clamp { RopeEnd::Clamped(target) } else { RopeEnd::Pinned(target) })
-        }
-        CableEnd::Body { body, anchor, clamp } => {
-            let b = sc.body(body).expect("validated");
-            if b.kind == BodyKind::Dynamic && !absorbed.contains(body.as_str()) {
-                // Explicit end: the anchor spring's target follows the rapier
-                // body's point; the body gets minus the spring force.
-                if *clamp {
-                    return Err(unsupported(format!(
-                        "cable `{}` with its `end` clamped to body `{body}`, which rapier keeps (a dynamic body held by joints or other cables: the end spring's orientation hold has a fixed target; clamp the `start` instead, or leave the end pinned)",
-                        c.name
-                    )));
-                }
-                let BaseMotion::Prescribed(f) = couple(body, *anchor, false) else { unreachable!("follow() is prescribed") };
-                let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |t| {
-                    let s = f(t);
-                    (s.position, s.velocity)
-                });
-                builder.end(RopeEnd::Pinned(target))
-            } else if b.kind == BodyKind::Dynamic {
-                bodies.push((body.clone(), BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
-                builder.end(RopeEnd::Body { body: lumped(b), anchor: *anchor, clamp: *clamp })
-            } else {
-                let spins = matches!(b.motion, Some(scenario::Motion::Spin { .. }));
-                if spins && *clamp {
-                    // The end spring's orientation hold has a constant target.
-                    return Err(unsupported(format!("cable `{}` with its `end` clamped to spinning body `{body}` (clamp the `start` instead)", c.name)));
-                }
-                let (b, a) = (b.clone(), *anchor);
-                let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |t| {
-                    let r = DMat3::from_quat(b.rotation_at(t)) * a;
-                    let (v, w) = b.motion.as_ref().map_or((DVec3::ZERO, DVec3::ZERO), |m| (m.velocity_at(t), m.angular_velocity_at(t)));
-                    (b.position_at(t) + r, v + w.cross(r))
-                });
-                builder.end(if *clamp { RopeEnd::Clamped(target) } else { RopeEnd::Pinned(target) })
-            }
-        }
-    };
-    let model = builder.build().map_err(|source| SimError::Build { file: file.to_string(), location: c.location, cable: c.name.clone(), source })?;
-    // Fix up the end body's place now that the chain exists.
-    if let Some((_, b)) = bodies.iter_mut().find(|(_, b)| b.link == usize::MAX) {
-        *b = model.layout.end_body.expect("end body built");
-    }
-    let mut cable = Cable::new(model, scheme.clone())
-        .map_err(|source| SimError::Diverged { cable: c.name.clone(), time: 0.0, source: Box::new(source) })?;
-    for l in &c.loads {
-        cable.add_point_load_and_moment(l.s, l.force, l.moment);
-    }
-    Ok(SimCable { name: c.name.clone(), cable, bodies, slide, couplings })
 }

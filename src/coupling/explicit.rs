@@ -2,10 +2,10 @@
 //! (rapier) integrates: the body's sampled motion drives the cable's base
 //! or end-spring target over a step, and the cable's reaction goes back to
 //! the body; and the drive of a trolley absorbed into a cable's chain.
-//! Shared by the scenario runner (`sim`) and the Bevy plugin.
+//! Used by the coupling core.
 
-use super::cable::Cable;
-use super::chain::{rotation_vector, BaseMotion, BaseState};
+use crate::cable::chain::{rotation_vector, BaseMotion, BaseState};
+use crate::cable::Cable;
 use glam::{DMat3, DVec3};
 use std::sync::{Arc, Mutex};
 
@@ -25,8 +25,6 @@ pub(crate) struct BodySample {
     pub angular_velocity: DVec3,
     /// Velocity change over the last step, m/s².
     pub acceleration: DVec3,
-    /// Body centre of mass, m.
-    pub com: DVec3,
 }
 
 impl BodySample {
@@ -76,7 +74,9 @@ pub(crate) fn reaction(cable: &Cable, start: bool, com: DVec3, t: f64) -> (DVec3
         let fc = ch.base_load();
         (fc.bot, fc.top - (com - ch.origin).cross(fc.bot))
     } else {
-        let Some(an) = ch.anchors.first() else { return (DVec3::ZERO, DVec3::ZERO) };
+        let Some(an) = ch.anchors.first() else {
+            return (DVec3::ZERO, DVec3::ZERO);
+        };
         let p = ch.link_point(an.link, an.local_point);
         let pv = ch.link_point_velocity(an.link, an.local_point);
         let (target, target_v) = (an.target)(t);

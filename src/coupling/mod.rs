@@ -1,0 +1,889 @@
+//! The coupling core (feature `rapier`, no Bevy): cables stepped beside
+//! rapier's sets, shared by the scenario runner ([`crate::sim`]) and the
+//! Bevy plugin, which are thin adapters that map scenario names or entities
+//! to rapier handles.
+//!
+//! [`Coupling`] owns the cables. It decides how each body a cable end is
+//! attached to is coupled ([`classify`]), builds the cables from
+//! [`CableSpec`]s written in rapier's terms, and runs the per-step exchange
+//! with a [`rapier3d::prelude::RigidBodySet`]:
+//!
+//! | phase | call | does |
+//! |---|---|---|
+//! | before rapier's step | [`Coupling::step`] | samples the bodies that move cable ends; reads what the user and rapier did to the carried bodies since the last step; steps every cable; hands the carried bodies to rapier with the velocity that lands them on the cable's pose; applies the explicit reactions |
+//! | after rapier's step | [`Coupling::after_rapier`] | reads the contact impulses rapier gave the carried bodies; puts them on the cable's pose and velocity |
+//!
+//! ## Roles of the bodies ([`Role`], decided by [`classify`])
+//! * **Carried** ([`Role::Carried`], [`Role::Trolley`]): a dynamic body at
+//!   the end of exactly one cable and at no other cable end, that no
+//!   impulse joint holds (hook, payload); or a dynamic body at the start of
+//!   exactly one cable and at no other cable end whose only joint is one
+//!   prismatic joint to a fixed body (a trolley on its rail). It is a link
+//!   of that cable's chain, solved implicitly with the rope (a 10 t payload
+//!   on a 0.3 kg element is as stable as the rope itself). **It stays a
+//!   dynamic rapier body**: its body type is never changed and its
+//!   colliders stay in rapier. Every step the core
+//!   * takes the velocity change the user made since the last step (a
+//!     velocity write, an impulse) and the one rapier's contacts made in
+//!     its last step, as an impulse `J = M Δv` (and `I Δω`) spread over the
+//!     step as a load on the body's link, so the rope and the body share it
+//!     as their joint inertia dictates;
+//!   * applies the user's force and torque, gravity scale and damping
+//!     ([`BodyInputs`]) inside the cable solve;
+//!   * sets the rapier body's velocity so that rapier's own integration
+//!     lands it on the cable's new pose (gravity, forces, damping, sleeping
+//!     and gyroscopic torques are switched off on the rapier body itself:
+//!     the cable solve has them), and after rapier's step puts it exactly on
+//!     the cable's pose and velocity.
+//!
+//!   A trolley's rail joint stays in rapier with its motor switched off
+//!   there; the adapter gives the motor to the cable ([`rail_drive`]).
+//!   `LockedAxes` on a carried body are refused ([`CouplingError::LockedAxes`]).
+//!   Contact impulses are those rapier computes for a free body of the
+//!   carried body's mass, one step late: good for pushes and knocks, not a
+//!   contact law (that is the contact issue's).
+//! * **Base** ([`Role::Base`]): a fixed or kinematic body moves the cable
+//!   end: the start's base or the end's anchor-spring target. With a
+//!   [`BodyMotion`] given by the adapter (a scenario's prescribed motion)
+//!   the cable reads the motion exactly; otherwise it samples rapier (pose,
+//!   velocity, and the velocity change over the last step).
+//! * **Explicit** ([`Role::Explicit`]): every other dynamic body (held by
+//!   joints, on several cables). The cable end follows the body's sampled
+//!   motion; the body gets the cable's reaction as an impulse every step.
+//!   Stable roughly while `k·h²/m ≲ 1` with `k = EA/L_e` (see
+//!   [`Coupling::explicit_ratios`]).
+
+mod explicit;
+
+pub(crate) use self::explicit::{follow, rail_drive, reaction, BodySample};
+use crate::cable::chain::rotation_vector;
+use crate::cable::{BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeStart};
+use crate::integrate::Scheme;
+use glam::{DMat3, DQuat, DVec3};
+use rapier3d::prelude as rp;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+use thiserror::Error;
+
+/// Where a cable end is held, in rapier's terms.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Attach {
+    /// A free end (a free start needs a path).
+    Free,
+    /// A world point, m; `clamp` also holds the tangent.
+    World {
+        /// The point, m.
+        point: DVec3,
+        /// Hold the tangent too.
+        clamp: bool,
+    },
+    /// A point of a rapier body, in the body's frame, m.
+    Body {
+        /// The body.
+        body: rp::RigidBodyHandle,
+        /// Attachment point in the body frame, m.
+        anchor: DVec3,
+        /// Hold the tangent too.
+        clamp: bool,
+    },
+}
+
+/// Prescribed motion of a fixed or kinematic body, known in closed form:
+/// `t ↦` the body frame (orientation, origin m) with its angular velocity
+/// (rad/s), origin velocity (m/s), angular acceleration (rad/s²) and origin
+/// acceleration (m/s²).
+pub type BodyMotion = Arc<dyn Fn(f64) -> BaseState + Send + Sync>;
+
+/// A cable to build, in rapier's terms.
+#[derive(Debug, Clone)]
+pub struct CableSpec {
+    /// The rope: length, elements, section, damping, gravity… Its start,
+    /// end and path are set by the core from the fields below.
+    pub rope: RopeBuilder,
+    /// Initial centreline (world, m). `None`: straight from start to end,
+    /// or straight down from the start when the end is free or carried.
+    pub path: Option<Vec<DVec3>>,
+    /// Start.
+    pub start: Attach,
+    /// End.
+    pub end: Attach,
+    /// Time integrator.
+    pub scheme: Scheme,
+    /// Mass properties and initial pose of the start and end bodies, when
+    /// the adapter knows them exactly (a scenario's f64 values); `None`:
+    /// read from rapier (f32).
+    pub exact: [Option<LumpedBody>; 2],
+}
+
+/// How a body is coupled to a cable end (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Role {
+    /// A link of the cable's chain behind the end (ball joint or clamped).
+    Carried,
+    /// A link of the cable's chain behind a prismatic sub-joint at its start
+    /// (a trolley); the rapier joint is the rail.
+    Trolley {
+        /// The rail joint.
+        joint: rp::ImpulseJointHandle,
+        /// Rail direction (world, unit).
+        axis: DVec3,
+        /// The rail joint's coordinate (anchor gap along the axis, m) when
+        /// the chain's rail coordinate is 0.
+        offset: f64,
+    },
+    /// A fixed or kinematic body that moves the cable end.
+    Base,
+    /// A dynamic body rapier keeps, coupled explicitly.
+    Explicit,
+}
+
+/// What the user asks of a carried body besides its velocity (the plugin
+/// reads bevy_rapier's components; a scenario body has the defaults).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyInputs {
+    /// Force at the centre of mass, world, N.
+    pub force: DVec3,
+    /// Torque, world, N·m.
+    pub torque: DVec3,
+    /// Gravity scale (1: normal gravity).
+    pub gravity_scale: f64,
+    /// Linear damping, 1/s (rapier's law: `−c m v`).
+    pub linear_damping: f64,
+    /// Angular damping, 1/s (`−c I ω`).
+    pub angular_damping: f64,
+}
+
+impl Default for BodyInputs {
+    fn default() -> Self {
+        BodyInputs { force: DVec3::ZERO, torque: DVec3::ZERO, gravity_scale: 1.0, linear_damping: 0.0, angular_damping: 0.0 }
+    }
+}
+
+/// Why a cable cannot be built or coupled.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum CouplingError {
+    /// A handle does not name a rapier body.
+    #[error("the cable's {end} is attached to a body that is not in rapier's body set")]
+    MissingBody {
+        /// `start` or `end`.
+        end: &'static str,
+    },
+    /// A free start without a path.
+    #[error("a free cable start needs a path (its first point is the start)")]
+    FreeStartNeedsPath,
+    /// The body is already carried by another cable.
+    #[error("the cable's {end} is attached to a body that cable #{cable} already carries as a link of its chain; attach all cables of a body in the same batch (then the body is coupled explicitly), slings solved in one implicit island are not built yet")]
+    BodyTaken {
+        /// `start` or `end`.
+        end: &'static str,
+        /// Index of the cable that carries it.
+        cable: usize,
+    },
+    /// A carried body with locked axes.
+    #[error("the body at the cable's {end} would be a link of the cable's chain, but it has locked axes (`LockedAxes`), which the cable solve does not model; unlock them, or hold the body with a joint")]
+    LockedAxes {
+        /// `start` or `end`.
+        end: &'static str,
+    },
+    /// A clamped end on a spinning or dynamic body rapier keeps.
+    #[error("the cable's end is clamped to a body that moves ({why}): the end spring's orientation hold has a fixed target; clamp the start instead, or leave the end pinned")]
+    ClampedMovingEnd {
+        /// What kind of body.
+        why: &'static str,
+    },
+    /// The rope could not be built.
+    #[error("{0}")]
+    Build(#[from] RopeError),
+    /// The cable could not be created or started.
+    #[error("{0}")]
+    Cable(Box<CableError>),
+}
+
+/// A body that is a link of a cable's chain.
+#[derive(Debug, Clone)]
+pub struct CarriedLink {
+    /// The rapier body.
+    pub body: rp::RigidBodyHandle,
+    /// Its place in the chain.
+    pub place: BodyInChain,
+    /// Mass, kg.
+    pub mass: f64,
+    /// Rotational inertia about the centre of mass, body frame, kg·m².
+    pub inertia: DMat3,
+    /// Centre of mass in the body frame, m.
+    pub com: DVec3,
+    /// The link's own damping rates before the body's were added, 1/s.
+    link_damping: (f64, f64),
+    /// Velocity (centre of mass) and angular velocity the core last left on
+    /// the rapier body, exactly as rapier stores them.
+    mark: Option<(rp::Vector, rp::Vector)>,
+    /// Velocity handed to rapier for its step (lands on the cable's pose).
+    landing: (DVec3, DVec3),
+    /// Impulse (N·s at the centre of mass) and angular impulse (N·m·s) that
+    /// rapier's contacts gave the body in its last step.
+    contact: (DVec3, DVec3),
+    /// Impulse applied in the last step (user + contacts), for probes.
+    pub last_impulse: (DVec3, DVec3),
+}
+
+/// A body that moves a cable end or takes its reaction explicitly.
+#[derive(Debug)]
+pub struct Follower {
+    /// The rapier body.
+    pub body: rp::RigidBodyHandle,
+    /// Attachment point, body frame, m.
+    pub anchor: DVec3,
+    /// `true`: the cable's start (base); `false`: its end (anchor spring).
+    pub start: bool,
+    /// A dynamic body that gets the cable's reaction.
+    pub dynamic: bool,
+    sample: Arc<Mutex<BodySample>>,
+    /// Time of the last sample, s.
+    sampled: Option<f64>,
+    /// Force (N) and moment about the centre of mass (N·m) of the cable on
+    /// the body over the last step (dynamic bodies).
+    pub reaction: (DVec3, DVec3),
+}
+
+/// One cable and its couplings.
+#[derive(Debug)]
+pub struct CoupledCable {
+    /// The cable.
+    pub cable: Cable,
+    /// Role of the body at the start and at the end (`None`: no body).
+    pub roles: [Option<(rp::RigidBodyHandle, Role)>; 2],
+    /// Bodies that are links of the chain.
+    pub carried: Vec<CarriedLink>,
+    /// Bodies sampled every step (bases without a closed-form motion,
+    /// explicit couplings).
+    pub followers: Vec<Follower>,
+    /// Number of constant loads on the chain (the per-step loads follow).
+    fixed_loads: usize,
+    /// Stopped after a failed step.
+    pub failed: bool,
+}
+
+impl CoupledCable {
+    /// The role of `body` in this cable, if it is attached.
+    pub fn role_of(&self, body: rp::RigidBodyHandle) -> Option<Role> {
+        self.roles.iter().flatten().find(|(b, _)| *b == body).map(|(_, r)| *r)
+    }
+
+    /// Pose (origin, orientation), velocity of the centre of mass and
+    /// angular velocity of a carried body, from the cable.
+    fn carried_state(&self, c: &CarriedLink) -> (DVec3, DMat3, DVec3, DVec3) {
+        let (p, r, v, w) = self.cable.model.body_state(&c.place);
+        let rc = r * c.com;
+        (p, r, v + w.cross(rc), w)
+    }
+
+    /// Marks the cable's constant loads (those on the chain now): the
+    /// per-step loads of the carried bodies are added after them.
+    pub fn keep_loads(&mut self) {
+        self.fixed_loads = self.cable.model.chain.loads.len();
+    }
+}
+
+/// Roles of the bodies at the ends of `specs`, cable by cable, given the
+/// bodies already used by `existing` cables (see the module docs).
+pub fn classify(
+    specs: &[&CableSpec],
+    existing: &[&CoupledCable],
+    bodies: &rp::RigidBodySet,
+    joints: &rp::ImpulseJointSet,
+) -> Vec<Result<[Option<(rp::RigidBodyHandle, Role)>; 2], CouplingError>> {
+    let mut uses: HashMap<rp::RigidBodyHandle, usize> = HashMap::new();
+    for s in specs {
+        for a in [&s.start, &s.end] {
+            if let Attach::Body { body, .. } = a {
+                *uses.entry(*body).or_default() += 1;
+            }
+        }
+    }
+    for c in existing {
+        for (b, _) in c.roles.iter().flatten() {
+            *uses.entry(*b).or_default() += 1;
+        }
+    }
+    specs
+        .iter()
+        .map(|s| {
+            let mut out = [None, None];
+            for (k, a) in [&s.start, &s.end].into_iter().enumerate() {
+                let Attach::Body { body, .. } = a else {
+                    continue;
+                };
+                let end = if k == 0 { "start" } else { "end" };
+                let Some(rb) = bodies.get(*body) else {
+                    return Err(CouplingError::MissingBody { end });
+                };
+                if let Some(ci) = existing.iter().position(|c| matches!(c.role_of(*body), Some(Role::Carried | Role::Trolley { .. }))) {
+                    return Err(CouplingError::BodyTaken { end, cable: ci });
+                }
+                let role = if !rb.is_dynamic() {
+                    Role::Base
+                } else if uses[body] != 1 {
+                    Role::Explicit
+                } else {
+                    let attached: Vec<_> = joints.attached_joints(*body).collect();
+                    match (k, attached.as_slice()) {
+                        (1, []) => Role::Carried,
+                        (0, [(b1, b2, jh, j)]) => {
+                            let other = if *b1 == *body { *b2 } else { *b1 };
+                            let prismatic = j.data.locked_axes == rp::JointAxesMask::LOCKED_PRISMATIC_AXES;
+                            match bodies.get(other) {
+                                Some(o) if prismatic && o.is_fixed() => {
+                                    let (frame_body, frame) = if *b1 == other { (o, j.data.local_frame1) } else { (o, j.data.local_frame2) };
+                                    let axis = (frame_body.position().rotation * (frame.rotation * rp::Vector::X)).as_dvec3().normalize();
+                                    let (p1, p2) =
+                                        (bodies[*b1].position() * j.data.local_frame1.translation, bodies[*b2].position() * j.data.local_frame2.translation);
+                                    // The rapier coordinate: body2's anchor minus body1's along the axis.
+                                    let offset = (p2 - p1).as_dvec3().dot(axis);
+                                    Role::Trolley { joint: *jh, axis, offset }
+                                }
+                                _ => Role::Explicit,
+                            }
+                        }
+                        _ => Role::Explicit,
+                    }
+                };
+                if matches!(role, Role::Carried | Role::Trolley { .. }) && !rb.locked_axes().is_empty() {
+                    return Err(CouplingError::LockedAxes { end });
+                }
+                out[k] = Some((*body, role));
+            }
+            Ok(out)
+        })
+        .collect()
+}
+
+/// Pose of a rapier body in f64: origin and orientation.
+pub fn pose_of(rb: &rp::RigidBody) -> (DVec3, DMat3) {
+    let p = rb.position();
+    (p.translation.as_dvec3(), DMat3::from_quat(p.rotation.as_dquat().normalize()))
+}
+
+/// Mass properties and pose of a rapier body as a chain link.
+fn lumped_of(rb: &rp::RigidBody) -> LumpedBody {
+    let (position, rotation) = pose_of(rb);
+    let mp = &rb.mass_properties().local_mprops;
+    let i = mp.reconstruct_inertia_matrix();
+    LumpedBody {
+        mass: mp.mass() as f64,
+        inertia: DMat3::from_cols(i.x_axis.as_dvec3(), i.y_axis.as_dvec3(), i.z_axis.as_dvec3()),
+        position,
+        rotation,
+        com: mp.local_com.as_dvec3(),
+    }
+}
+
+/// Sample of the point `anchor` (body frame) of a rapier body.
+fn sample_body(rb: &rp::RigidBody, anchor: DVec3) -> BodySample {
+    let (p, r) = pose_of(rb);
+    let a = r * anchor;
+    let w = rb.angvel().as_dvec3();
+    let com = rb.center_of_mass().as_dvec3();
+    let v = rb.linvel().as_dvec3() + w.cross(p + a - com);
+    BodySample { t0: 0.0, position: p + a, rotation: r, velocity: v, angular_velocity: w, acceleration: DVec3::ZERO }
+}
+
+/// The motion of the point `anchor` (body frame) of a body moving as `m`.
+fn at_anchor(s: BaseState, anchor: DVec3) -> BaseState {
+    let r = s.rotation * anchor;
+    let (w, al) = (s.angular_velocity, s.angular_acceleration);
+    BaseState {
+        rotation: s.rotation,
+        position: s.position + r,
+        angular_velocity: w,
+        velocity: s.velocity + w.cross(r),
+        angular_acceleration: al,
+        acceleration: s.acceleration + al.cross(r) + w.cross(w.cross(r)),
+    }
+}
+
+type Target = Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>;
+
+/// A start held by a base: clamped (tangent held) or pinned.
+fn held_start(b: BaseMotion, clamp: bool) -> RopeStart {
+    if clamp {
+        RopeStart::Clamped(b)
+    } else {
+        RopeStart::Pinned(b)
+    }
+}
+
+/// An end held by an anchor spring to a target: clamped or pinned.
+fn held_end(t: Target, clamp: bool) -> RopeEnd {
+    if clamp {
+        RopeEnd::Clamped(t)
+    } else {
+        RopeEnd::Pinned(t)
+    }
+}
+
+fn target_of(m: BaseMotion) -> Target {
+    Arc::new(move |t| {
+        let s = m.at(t);
+        (s.position, s.velocity)
+    })
+}
+
+/// The cables and their couplings (see the module docs).
+#[derive(Debug, Default)]
+pub struct Coupling {
+    /// The cables, in the order they were added.
+    pub cables: Vec<CoupledCable>,
+}
+
+impl Coupling {
+    /// An empty core.
+    pub fn new() -> Self {
+        Coupling::default()
+    }
+
+    /// Builds the cables of `specs` and adds them (see [`build_cables`]);
+    /// returns, per spec, the new cable's index or why it was not built.
+    pub fn add(
+        &mut self,
+        specs: &[CableSpec],
+        bodies: &mut rp::RigidBodySet,
+        joints: &mut rp::ImpulseJointSet,
+        motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
+    ) -> Vec<Result<usize, CouplingError>> {
+        let existing: Vec<&CoupledCable> = self.cables.iter().collect();
+        let built = build_cables(specs, &existing, bodies, joints, motions);
+        built
+            .into_iter()
+            .map(|r| {
+                self.cables.push(r?);
+                Ok(self.cables.len() - 1)
+            })
+            .collect()
+    }
+
+    /// Gives cable `i` the rapier velocities of the bodies it carries as its
+    /// initial rates ([`Cable::set_link_velocities`]: the rates of least
+    /// stiffness energy). Does nothing when they are all at rest. On error,
+    /// returns the body whose velocity the chain cannot take (or the first
+    /// moving one).
+    pub fn start_velocities(&mut self, i: usize, velocity: &dyn Fn(rp::RigidBodyHandle) -> (DVec3, DVec3)) -> Result<(), (rp::RigidBodyHandle, CableError)> {
+        self.cables[i].start_velocities(velocity)
+    }
+
+    /// Phase 1 over every cable: [`step_cables`].
+    pub fn step(
+        &mut self,
+        bodies: &mut rp::RigidBodySet,
+        joints: &mut rp::ImpulseJointSet,
+        h: f64,
+        substeps: u32,
+        inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
+    ) -> Vec<(usize, f64, CableError)> {
+        let mut all: Vec<&mut CoupledCable> = self.cables.iter_mut().collect();
+        step_cables(&mut all, bodies, joints, h, substeps, inputs)
+    }
+
+    /// Phase 2 over every cable: [`after_rapier`].
+    pub fn after_rapier(&mut self, bodies: &mut rp::RigidBodySet, narrow_phase: &rp::NarrowPhase) {
+        let mut all: Vec<&mut CoupledCable> = self.cables.iter_mut().collect();
+        after_rapier(&mut all, bodies, narrow_phase)
+    }
+
+    /// For every explicit coupling: (cable index, body, `true` at the
+    /// cable's start, k·h²/m) with `k = EA/L_e` of the cable's elements and
+    /// `m` the body's mass, at step `h`. Above about 1 the coupling may be
+    /// unstable unless joints hold the body.
+    pub fn explicit_ratios(&self, bodies: &rp::RigidBodySet, h: f64) -> Vec<(usize, rp::RigidBodyHandle, bool, f64)> {
+        let mut out = Vec::new();
+        for (i, cc) in self.cables.iter().enumerate() {
+            let k = cc.cable.model.section.ea / cc.cable.model.layout.element_length;
+            for f in cc.followers.iter().filter(|f| f.dynamic) {
+                let m = bodies.get(f.body).map_or(f64::INFINITY, |rb| rb.mass() as f64);
+                out.push((i, f.body, f.start, k * h * h / m));
+            }
+        }
+        out
+    }
+}
+
+impl CoupledCable {
+    /// Gives the cable the velocities of the bodies it carries (`velocity`:
+    /// a body's centre-of-mass velocity, m/s, and angular velocity, rad/s;
+    /// the adapters read rapier's, or the scenario's exact values) as its
+    /// initial rates ([`Cable::set_link_velocities`]: the rates of least
+    /// stiffness energy). Does nothing when they are all at rest. On error,
+    /// returns the body whose velocity the chain cannot take (or the first
+    /// moving one).
+    pub fn start_velocities(&mut self, velocity: &dyn Fn(rp::RigidBodyHandle) -> (DVec3, DVec3)) -> Result<(), (rp::RigidBodyHandle, CableError)> {
+        let cc = self;
+        let targets: Vec<(rp::RigidBodyHandle, LinkVelocity)> = cc
+            .carried
+            .iter()
+            .map(|c| {
+                let (linear, angular) = velocity(c.body);
+                let link = LinkVelocity { link: c.place.link, point: c.place.origin + c.place.rotation * c.com, linear, angular };
+                (c.body, link)
+            })
+            .collect();
+        if targets.iter().all(|(_, t)| t.linear == DVec3::ZERO && t.angular == DVec3::ZERO) {
+            return Ok(());
+        }
+        let links: Vec<LinkVelocity> = targets.iter().map(|(_, t)| *t).collect();
+        cc.cable.set_link_velocities(&links).map_err(|e| {
+            let who = match &e {
+                CableError::Velocity { link, .. } => targets.iter().find(|(_, t)| t.link == *link).map(|(b, _)| *b),
+                _ => None,
+            };
+            let who = who.or_else(|| targets.iter().find(|(_, t)| t.linear != DVec3::ZERO || t.angular != DVec3::ZERO).map(|(b, _)| *b));
+            (who.expect("a moving body exists here"), e)
+        })
+    }
+
+    /// Gives the bodies this cable carries back to rapier (gravity,
+    /// sleeping and gyroscopic torques on again; `restore` gives each body's
+    /// gravity scale and damping). Call it when the cable is removed.
+    pub fn release(&self, bodies: &mut rp::RigidBodySet, restore: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs) {
+        for c in &self.carried {
+            if let Some(rb) = bodies.get_mut(c.body) {
+                let inp = restore(c.body);
+                rb.set_gravity_scale(inp.gravity_scale as f32, true);
+                rb.set_linear_damping(inp.linear_damping as f32);
+                rb.set_angular_damping(inp.angular_damping as f32);
+                rb.enable_gyroscopic_forces(true);
+                *rb.activation_mut() = rp::RigidBodyActivation::active();
+            }
+        }
+    }
+}
+
+/// Switches off on a carried rapier body what the cable solve does for it:
+/// gravity, forces, damping, sleeping and gyroscopic torques.
+fn hand_to_cable(rb: &mut rp::RigidBody) {
+    rb.set_gravity_scale(0.0, false);
+    rb.reset_forces(false);
+    rb.reset_torques(false);
+    rb.set_linear_damping(0.0);
+    rb.set_angular_damping(0.0);
+    rb.enable_gyroscopic_forces(false);
+    let act = rb.activation_mut();
+    if act.normalized_linear_threshold >= 0.0 || act.angular_threshold >= 0.0 {
+        *act = rp::RigidBodyActivation::cannot_sleep();
+    }
+}
+
+/// Switches off the motors of a trolley's rail joint in rapier (the cable
+/// solve drives the rail).
+fn mute_motor(joints: &mut rp::ImpulseJointSet, joint: rp::ImpulseJointHandle) {
+    if let Some(j) = joints.get_mut(joint, false) {
+        if j.data.motors.iter().any(|m| m.max_force != 0.0) {
+            for m in j.data.motors.iter_mut() {
+                m.max_force = 0.0;
+            }
+        }
+    }
+}
+
+/// Builds one cable from its spec and the roles of its end bodies.
+fn build(
+    spec: &CableSpec,
+    roles: [Option<(rp::RigidBodyHandle, Role)>; 2],
+    bodies: &rp::RigidBodySet,
+    motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
+) -> Result<CoupledCable, CouplingError> {
+    let mut followers = Vec::new();
+    let mut carried = Vec::new();
+    // The motion of a base body's point: closed form, or a sampled follower.
+    let mut base_motion = |body: rp::RigidBodyHandle, anchor: DVec3, start: bool, rb: &rp::RigidBody| -> BaseMotion {
+        if let Some(m) = motions.get(&body) {
+            if rb.is_fixed() {
+                return BaseMotion::Fixed(at_anchor(m(0.0), anchor));
+            }
+            let m = m.clone();
+            return BaseMotion::Prescribed(Arc::new(move |t| at_anchor(m(t), anchor)));
+        }
+        if rb.is_fixed() {
+            let (p, r) = pose_of(rb);
+            return BaseMotion::Fixed(BaseState::fixed(r, p + r * anchor));
+        }
+        let shared = Arc::new(Mutex::new(sample_body(rb, anchor)));
+        followers.push(Follower { body, anchor, start, dynamic: rb.is_dynamic(), sample: shared.clone(), sampled: None, reaction: (DVec3::ZERO, DVec3::ZERO) });
+        follow(shared)
+    };
+    let mut rope = spec.rope.clone();
+    let start_point;
+    rope = match (spec.start, roles[0]) {
+        (Attach::Free, _) => {
+            let p = spec.path.as_ref().and_then(|p| p.first()).ok_or(CouplingError::FreeStartNeedsPath)?;
+            start_point = *p;
+            rope.start(RopeStart::Free)
+        }
+        (Attach::World { point, clamp }, _) => {
+            start_point = point;
+            let b = BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, point));
+            rope.start(held_start(b, clamp))
+        }
+        (Attach::Body { body, anchor, clamp }, Some((_, role))) => {
+            let rb = &bodies[body];
+            let (p, r) = pose_of(rb);
+            start_point = p + r * anchor;
+            if let Role::Trolley { axis, .. } = role {
+                carried.push((body, 0, BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
+                rope.start(RopeStart::SlidingBody { body: spec.exact[0].unwrap_or_else(|| lumped_of(rb)), axis, anchor, clamp })
+            } else {
+                let b = base_motion(body, anchor, true, rb);
+                rope.start(held_start(b, clamp))
+            }
+        }
+        (Attach::Body { .. }, None) => unreachable!("classify gives every body end a role"),
+    };
+    let mut end_point = None;
+    rope = match (spec.end, roles[1]) {
+        (Attach::Free, _) => rope.end(RopeEnd::Free),
+        (Attach::World { point, clamp }, _) => {
+            end_point = Some(point);
+            let t: Target = Arc::new(move |_| (point, DVec3::ZERO));
+            rope.end(held_end(t, clamp))
+        }
+        (Attach::Body { body, anchor, clamp }, Some((_, role))) => {
+            let rb = &bodies[body];
+            let (p, r) = pose_of(rb);
+            end_point = Some(p + r * anchor);
+            if role == Role::Carried {
+                carried.push((body, 1, BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
+                rope.end(RopeEnd::Body { body: spec.exact[1].unwrap_or_else(|| lumped_of(rb)), anchor, clamp })
+            } else {
+                let moving = !rb.is_fixed()
+                    && !motions.get(&body).is_some_and(|m| {
+                        let (a, b) = (m(0.0), m(1.0));
+                        a.rotation == b.rotation && a.angular_velocity == DVec3::ZERO
+                    });
+                if clamp && rb.is_dynamic() {
+                    return Err(CouplingError::ClampedMovingEnd { why: "a dynamic body rapier keeps" });
+                }
+                if clamp && moving && !rb.is_dynamic() {
+                    return Err(CouplingError::ClampedMovingEnd { why: "a kinematic body that may turn" });
+                }
+                let t = target_of(base_motion(body, anchor, false, rb));
+                rope.end(held_end(t, clamp))
+            }
+        }
+        (Attach::Body { .. }, None) => unreachable!("classify gives every body end a role"),
+    };
+    let path = match (&spec.path, end_point) {
+        (Some(p), _) => p.clone(),
+        (None, Some(e)) => vec![start_point, e],
+        (None, None) => vec![start_point, start_point - DVec3::Y * spec.rope.length()],
+    };
+    let model = rope.path(path).build()?;
+    let carried = carried
+        .into_iter()
+        .map(|(body, k, mut place)| {
+            if place.link == usize::MAX {
+                place = model.layout.end_body.expect("end body built");
+            }
+            let lb = spec.exact[k].unwrap_or_else(|| lumped_of(&bodies[body]));
+            let link_damping = model.chain.joints[place.link].link.map_or((0.0, 0.0), |l| (l.linear_damping, l.angular_damping));
+            let rb = &bodies[body];
+            CarriedLink {
+                body,
+                place,
+                mass: lb.mass,
+                inertia: lb.inertia,
+                com: lb.com,
+                link_damping,
+                mark: Some((rb.linvel(), rb.angvel())),
+                landing: (DVec3::ZERO, DVec3::ZERO),
+                contact: (DVec3::ZERO, DVec3::ZERO),
+                last_impulse: (DVec3::ZERO, DVec3::ZERO),
+            }
+        })
+        .collect();
+    let cable = Cable::new(model, spec.scheme.clone()).map_err(|e| CouplingError::Cable(Box::new(e)))?;
+    let fixed_loads = cable.model.chain.loads.len();
+    Ok(CoupledCable { cable, roles, carried, followers, fixed_loads, failed: false })
+}
+
+/// Phase 1 of a step of length `h`, before rapier steps: samples the
+/// followers (at each cable's own time), reads the carried bodies (`inputs` gives each one's force,
+/// gravity scale and damping), steps every cable that has not failed in
+/// `substeps` equal sub-steps (before its very first step it recomputes
+/// its acceleration with the loads then acting), then hands the carried
+/// bodies to rapier and applies the explicit reactions as impulses.
+/// Returns the cables that failed in this step, with the error and the
+/// time of the failing sub-step; a failed cable keeps its last good
+/// state and is skipped from then on.
+pub fn step_cables(
+    cables: &mut [&mut CoupledCable],
+    bodies: &mut rp::RigidBodySet,
+    joints: &mut rp::ImpulseJointSet,
+    h: f64,
+    substeps: u32,
+    inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
+) -> Vec<(usize, f64, CableError)> {
+    // 1. Sample every follower before any cable moves a body.
+    for cc in cables.iter_mut().filter(|c| !c.failed) {
+        let t = cc.cable.time();
+        for f in &mut cc.followers {
+            let Some(rb) = bodies.get(f.body) else {
+                continue;
+            };
+            let mut s = sample_body(rb, f.anchor);
+            s.t0 = t;
+            let since = f.sampled.map(|t0| t - t0).filter(|d| *d > 0.0);
+            // A dynamic body's velocity from its pose change (see BodySample::update).
+            f.sample.lock().unwrap_or_else(|e| e.into_inner()).update(s, since, rb.is_dynamic());
+            f.sampled = Some(t);
+            f.reaction = (DVec3::ZERO, DVec3::ZERO);
+        }
+    }
+    // 2. Carried bodies: impulses and loads; step the cables.
+    let n = substeps.max(1);
+    let mut failures = Vec::new();
+    for (ci, cc) in cables.iter_mut().enumerate().filter(|(_, c)| !c.failed) {
+        let t = cc.cable.time();
+        cc.cable.model.chain.loads.truncate(cc.fixed_loads);
+        for k in 0..cc.carried.len() {
+            let Some(rb) = bodies.get_mut(cc.carried[k].body) else {
+                continue;
+            };
+            if let Some((_, Role::Trolley { joint, .. })) = cc.roles[0] {
+                mute_motor(joints, joint);
+            }
+            hand_to_cable(rb);
+            let c = &mut cc.carried[k];
+            let (_, r) = pose_of(rb);
+            let i_world = r * c.inertia * r.transpose();
+            // What the user did to the body since the core left it
+            // (velocity writes, impulses), exactly as rapier stores it.
+            let mut j = c.contact;
+            if let Some((v, w)) = c.mark {
+                if rb.linvel() != v || rb.angvel() != w {
+                    j.0 += (rb.linvel() - v).as_dvec3() * c.mass;
+                    j.1 += i_world * (rb.angvel() - w).as_dvec3();
+                }
+            }
+            c.contact = (DVec3::ZERO, DVec3::ZERO);
+            c.last_impulse = j;
+            let input = inputs(c.body);
+            let g = cc.cable.model.chain.gravity;
+            let force = input.force + g * (c.mass * (input.gravity_scale - 1.0)) + j.0 / h;
+            let moment = input.torque + j.1 / h;
+            let local_point = c.place.origin + c.place.rotation * c.com;
+            let (link, mass) = (c.place.link, c.mass);
+            let (ld, ad) = c.link_damping;
+            if let Some(lm) = cc.cable.model.chain.joints[link].link.as_mut() {
+                let share = mass / lm.mass;
+                lm.linear_damping = ld + input.linear_damping * share;
+                lm.angular_damping = ad + input.angular_damping * share;
+            }
+            if force != DVec3::ZERO || moment != DVec3::ZERO {
+                cc.cable.model.chain.loads.push(LinkLoad { link, force, local_point, moment });
+            }
+        }
+        let fail = |cc: &mut CoupledCable, time: f64, e: CableError| {
+            cc.failed = true;
+            (ci, time, e)
+        };
+        if cc.cable.steps == 0 {
+            if let Err(e) = cc.cable.recompute_acceleration() {
+                failures.push(fail(cc, t, e));
+                continue;
+            }
+        }
+        let hs = h / n as f64;
+        for k in 0..n {
+            if let Err(e) = cc.cable.step(hs) {
+                failures.push(fail(cc, t + k as f64 * hs, e));
+                break;
+            }
+        }
+    }
+    // 3. Hand the carried bodies to rapier; explicit reactions.
+    for cc in cables.iter_mut().filter(|c| !c.failed) {
+        for k in 0..cc.carried.len() {
+            let (p1, r1, _, _) = cc.carried_state(&cc.carried[k]);
+            let c = &mut cc.carried[k];
+            let Some(rb) = bodies.get_mut(c.body) else {
+                continue;
+            };
+            // Rapier moves the centre of mass by v·h and turns the body
+            // by exp(ω h) about it.
+            let (p0, r0) = pose_of(rb);
+            let v = (p1 + r1 * c.com - (p0 + r0 * c.com)) / h;
+            let w = rotation_vector(&(r1 * r0.transpose())) / h;
+            rb.set_linvel(v.as_vec3(), true);
+            rb.set_angvel(w.as_vec3(), true);
+            c.landing = (rb.linvel().as_dvec3(), rb.angvel().as_dvec3());
+        }
+        let time = cc.cable.time();
+        for f in cc.followers.iter_mut().filter(|f| f.dynamic) {
+            let Some(rb) = bodies.get_mut(f.body) else {
+                continue;
+            };
+            let com = rb.center_of_mass().as_dvec3();
+            let (force, moment) = reaction(&cc.cable, f.start, com, time);
+            f.reaction = (force, moment);
+            rb.apply_impulse((force * h).as_vec3(), true);
+            rb.apply_torque_impulse((moment * h).as_vec3(), true);
+        }
+    }
+    failures
+}
+
+/// Phase 2, after rapier's step: the velocity change rapier's contacts
+/// gave each carried body (only if one of its colliders has an active
+/// contact) is kept as an impulse for the next step; the body is put on
+/// the cable's pose and velocity.
+pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBodySet, narrow_phase: &rp::NarrowPhase) {
+    for cc in cables.iter_mut() {
+        for k in 0..cc.carried.len() {
+            let (p, r, v, w) = cc.carried_state(&cc.carried[k]);
+            let c = &mut cc.carried[k];
+            let Some(rb) = bodies.get_mut(c.body) else {
+                continue;
+            };
+            let touched = rb.colliders().iter().any(|h| narrow_phase.contact_pairs_with(*h).any(|p| p.has_any_active_contact()));
+            if touched && !cc.failed {
+                let (_, r_now) = pose_of(rb);
+                let i_world = r_now * c.inertia * r_now.transpose();
+                c.contact = ((rb.linvel().as_dvec3() - c.landing.0) * c.mass, i_world * (rb.angvel().as_dvec3() - c.landing.1));
+            }
+            rb.set_position(rp::Pose::from_parts(p.as_vec3(), DQuat::from_mat3(&r).as_quat()), true);
+            rb.set_linvel(v.as_vec3(), true);
+            rb.set_angvel(w.as_vec3(), true);
+            c.mark = Some((rb.linvel(), rb.angvel()));
+        }
+    }
+}
+
+/// Builds the cables of `specs`, classified together and with the bodies
+/// `existing` cables use ([`classify`]); returns, per spec, the cable or why
+/// it was not built. `motions` gives closed-form motions of fixed or
+/// kinematic bodies (others are sampled). Carried bodies get the rapier
+/// settings the module docs describe and a trolley's rail motor is switched
+/// off in rapier; initial velocities are not given to the chains yet
+/// ([`CoupledCable::start_velocities`]).
+pub fn build_cables(
+    specs: &[CableSpec],
+    existing: &[&CoupledCable],
+    bodies: &mut rp::RigidBodySet,
+    joints: &mut rp::ImpulseJointSet,
+    motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
+) -> Vec<Result<CoupledCable, CouplingError>> {
+    let refs: Vec<&CableSpec> = specs.iter().collect();
+    let roles = classify(&refs, existing, bodies, joints);
+    specs
+        .iter()
+        .zip(roles)
+        .map(|(spec, roles)| {
+            let cc = build(spec, roles?, bodies, motions)?;
+            for c in &cc.carried {
+                hand_to_cable(&mut bodies[c.body]);
+            }
+            if let Some((_, Role::Trolley { joint, .. })) = cc.roles[0] {
+                mute_motor(joints, joint);
+            }
+            Ok(cc)
+        })
+        .collect()
+}

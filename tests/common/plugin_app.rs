@@ -1,0 +1,18 @@
+//! A headless Bevy app with bevy_rapier in `FixedUpdate` and the cable
+//! plugin, advancing exactly one fixed step of `dt` per `update()`.
+
+use bevy::prelude::*;
+use bevy::time::TimeUpdateStrategy;
+use bevy_rapier3d::prelude::*;
+use bevy_rapier_cable::plugin::CablePlugin;
+
+pub fn headless_app(dt: f32) -> App {
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, TransformPlugin, RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default()));
+    app.insert_resource(Time::<Fixed>::from_seconds(dt as f64));
+    app.insert_resource(TimestepMode::Fixed { dt, substeps: 1 });
+    app.insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+    app.finish();
+    app.cleanup();
+    app
+}
