@@ -17,6 +17,7 @@
 //! recurrence with â in the role of its acceleration. With α_m = 0 and
 //! α_f = −α it is HHT; with α_m = α_f = 0, â = a and it is Newmark.
 
+use super::error::IntegrateError;
 use super::integrator::{StepStats, Workspace};
 use super::newton::{self, Affine, Failure, NewtonSettings};
 use super::scheme::AlphaParameters;
@@ -66,8 +67,39 @@ pub(crate) fn step_alpha<S: SecondOrderSystem + ?Sized>(
     Ok(())
 }
 
-/// One linearly implicit θ-step of size `h` (s) with weight `w`: exactly one
-/// Newton correction from `a₁ = a₀`, no convergence test.
+/// Largest `Ω = h ω_max` (ω_max from [`SecondOrderSystem::max_frequency`])
+/// at which [`step_linearly_implicit`] linearises at the predicted state;
+/// above it (or when the system does not know its highest frequency) it
+/// linearises at the start configuration.
+const LINEARLY_IMPLICIT_STIFF_OMEGA: f64 = 1.0;
+
+/// Fraction of the predicted displacement used for the directional
+/// difference `J d ≈ (r(q₀ + ε d) − r(q₀))/ε` of the stiff form (a power of
+/// two; the rope tolerates up to 0.2, the linear recurrences are exact to
+/// round-off for any value).
+const DIRECTION_FRACTION: f64 = 1.0 / 64.0;
+
+/// One linearly implicit θ-step of size `h` (s) with weight `w`: one
+/// linearised solve with the system's tangent, no convergence loop.
+///
+/// The θ-method `v₁ = v + h(1 − w) a₀ + h w a₁`,
+/// `q₁ = q + h v + h² w (1 − w) a₀ + h² w² a₁` with `r(t₁, q₁, v₁, a₁) = 0`
+/// is linearised once, around the predicted velocity `v_p = v + h a₀` and
+/// acceleration `a₀`, and solved with `M + h w C + h² w² K`:
+///
+/// * non-stiff systems (`h ω_max ≤ 1`): at the predicted configuration
+///   `q_p = q + h v + h² w a₀` (one fused residual + solve);
+/// * stiff systems: at the start configuration `q`, the predicted
+///   displacement `d = h v + h² w a₀` entering linearly through a
+///   directional difference of the residual (two residuals, one solve).
+///   Evaluating the residual at `q_p` extrapolates the stiff modes (element
+///   stretch, the tension-stiffened bending of short elements) by `Ω` and
+///   `Ω²`; with a single correction the second-order remainder of those
+///   extrapolations is never removed, and on a chain in relative coordinates
+///   it drives the top elements unstable (the hoist pendulum at N ≥ 100,
+///   `tests/fast_preset.rs`).
+///
+/// On a linear system both forms are the same θ-step (exact linearisation).
 pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     state: &mut State,
@@ -85,11 +117,96 @@ pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
         ws.x[i] = a0;
     }
     let map = Affine { t: state.t + h, c_q: h * h * w * w, c_v: h * w, h };
-    newton::solve(sys, ws, map, settings, true, stats)?;
+    let stiff = sys.max_frequency(&state.q).is_none_or(|omega| !(omega * h <= LINEARLY_IMPLICIT_STIFF_OMEGA));
+    if stiff {
+        linearised_at_start(sys, state, ws, map, stats)?;
+    } else {
+        newton::solve(sys, ws, map, settings, true, stats)?;
+    }
     state.q.copy_from_slice(&ws.q);
     state.v.copy_from_slice(&ws.v);
     state.a.copy_from_slice(&ws.x);
     state.a_hat.copy_from_slice(&ws.x);
     state.t += h;
+    Ok(())
+}
+
+/// The stiff form of [`step_linearly_implicit`]: with `x = a₀` in `ws.x`
+/// and the affine bases in `ws.qb`, `ws.vb`, solves
+/// `(M + c_v C + c_q K) δ = −r(t₁, q, v_p, a₀) − K d` at `(q, v_p, a₀)`,
+/// `K d` by a directional difference, and leaves `x = a₀ + δ` and the
+/// matching coordinates in `ws`.
+fn linearised_at_start<S: SecondOrderSystem + ?Sized>(
+    sys: &mut S,
+    state: &State,
+    ws: &mut Workspace,
+    map: Affine,
+    stats: &mut StepStats,
+) -> Result<(), Failure> {
+    let Affine { t, c_q, c_v, .. } = map;
+    let n = state.dof();
+    let eps = DIRECTION_FRACTION;
+    for i in 0..n {
+        // d = q_p − q and v_p, the predicted displacement and velocity.
+        ws.dq_sum[i] = ws.qb[i] + c_q * ws.x[i] - state.q[i];
+        ws.v[i] = ws.vb[i] + c_v * ws.x[i];
+        ws.q[i] = state.q[i] + ws.dq_sum[i];
+    }
+    // Non-smooth laws on the branch of the predicted configuration, as the
+    // one-correction form has them.
+    sys.freeze_branches(&ws.q);
+    for i in 0..n {
+        ws.q[i] = state.q[i] + eps * ws.dq_sum[i];
+    }
+    let result = linear_solve_at(sys, state, ws, map, stats);
+    sys.release_branches();
+    result?;
+    if !ws.dx.iter().all(|x| x.is_finite()) {
+        return Err(IntegrateError::NonFinite { t }.into());
+    }
+    // The step's displacement from q, applied in the system's own way if it
+    // has one (a chain closed by anchors: link by link).
+    for i in 0..n {
+        ws.x[i] += ws.dx[i];
+        ws.dx_prev[i] = ws.qb[i] + c_q * ws.x[i] - state.q[i];
+    }
+    if c_q > 0.0 && sys.nonlinear_update(&state.q, &ws.dx_prev, 1.0, &mut ws.q_new) {
+        for i in 0..n {
+            ws.x[i] = (ws.q_new[i] - ws.qb[i]) / c_q;
+        }
+    }
+    for i in 0..n {
+        ws.q[i] = ws.qb[i] + c_q * ws.x[i];
+        ws.v[i] = ws.vb[i] + c_v * ws.x[i];
+    }
+    Ok(())
+}
+
+/// The two residuals and the solve of [`linearised_at_start`] (branches
+/// frozen by the caller): `ws.dx = δ`.
+fn linear_solve_at<S: SecondOrderSystem + ?Sized>(
+    sys: &mut S,
+    state: &State,
+    ws: &mut Workspace,
+    map: Affine,
+    stats: &mut StepStats,
+) -> Result<(), Failure> {
+    let Affine { t, c_q, c_v, .. } = map;
+    let eps = DIRECTION_FRACTION;
+    let system = |source| Failure::Error(IntegrateError::System { t, source });
+    sys.residual(t, &ws.q, &ws.v, &ws.x, &mut ws.sq).map_err(system)?;
+    stats.residual_evals += 1;
+    // Last: the tangent is taken here.
+    sys.residual(t, &state.q, &ws.v, &ws.x, &mut ws.r).map_err(system)?;
+    stats.residual_evals += 1;
+    for (r, r_eps) in ws.r.iter_mut().zip(&ws.sq) {
+        *r = -(*r + (r_eps - *r) / eps);
+    }
+    if !ws.r.iter().all(|x| x.is_finite()) {
+        return Err(IntegrateError::NonFinite { t }.into());
+    }
+    sys.solve_tangent(t, &state.q, &ws.v, &ws.x, c_v, c_q, &ws.r, &mut ws.dx).map_err(system)?;
+    stats.solves += 1;
+    stats.newton_iterations += 1;
     Ok(())
 }

@@ -67,9 +67,24 @@ pub enum Scheme {
     },
     /// The fast game preset: one linearly implicit θ-step,
     /// `v₁ = v + h[(1 − w) a₀ + w a₁]`, `q₁ = q + h[(1 − w) v₀ + w v₁]`,
-    /// with exactly one Newton correction from `a₁ = a₀` and no convergence
-    /// loop. `w = 1` is semi-implicit (linearly implicit) Euler, which on a
-    /// linear system is backward Euler. `w ∈ [1/2, 1]`.
+    /// linearised once and solved once with `M + h w C + h² w² K` (no
+    /// convergence loop). `w = 1` is semi-implicit (linearly implicit)
+    /// Euler, which on a linear system is backward Euler. `w ∈ [1/2, 1]`.
+    ///
+    /// The linearisation is at the predicted velocity `v + h a₀` and
+    /// acceleration `a₀`; its configuration depends on the system's
+    /// stiffness at this step ([`SecondOrderSystem::max_frequency`]
+    /// `ω_max`): for `h ω_max ≤ 1` the predicted configuration
+    /// `q + h v + h² w a₀` (one residual, one solve: a single Newton
+    /// correction); otherwise, and when `ω_max` is unknown, the start
+    /// configuration `q`, the predicted displacement entering linearly
+    /// through a directional difference of the residual (two residuals, one
+    /// solve). On a stiff rope the first form diverges (one correction
+    /// cannot remove the second-order remainder of the extrapolated element
+    /// stretch and bending: `tests/fast_preset.rs`); on a linear system both
+    /// are the same θ-step.
+    ///
+    /// [`SecondOrderSystem::max_frequency`]: super::SecondOrderSystem::max_frequency
     LinearlyImplicit {
         /// Implicitness weight w (dimensionless), in `[1/2, 1]`.
         w: f64,
