@@ -494,15 +494,7 @@ impl Coupling {
     /// `m` the body's mass, at step `h`. Above about 1 the coupling may be
     /// unstable unless joints hold the body.
     pub fn explicit_ratios(&self, bodies: &rp::RigidBodySet, h: f64) -> Vec<(usize, rp::RigidBodyHandle, bool, f64)> {
-        let mut out = Vec::new();
-        for (i, cc) in self.cables.iter().enumerate() {
-            let k = cc.cable.model.section.ea / cc.cable.model.layout.element_length;
-            for f in cc.followers.iter().filter(|f| f.dynamic) {
-                let m = bodies.get(f.body).map_or(f64::INFINITY, |rb| rb.mass() as f64);
-                out.push((i, f.body, f.start, k * h * h / m));
-            }
-        }
-        out
+        self.cables.iter().enumerate().flat_map(|(i, cc)| cc.explicit_ratios(bodies, h).into_iter().map(move |(b, s, r)| (i, b, s, r))).collect()
     }
 }
 
@@ -537,6 +529,18 @@ impl CoupledCable {
             let who = who.or_else(|| targets.iter().find(|(_, t)| t.linear != DVec3::ZERO || t.angular != DVec3::ZERO).map(|(b, _)| *b));
             (who.expect("a moving body exists here"), e)
         })
+    }
+
+    /// For every explicit coupling of this cable: (body, `true` at the
+    /// cable's start, k·h²/m) with `k = EA/L_e` and `m` the body's mass, at
+    /// step `h` (see [`Coupling::explicit_ratios`]).
+    pub fn explicit_ratios(&self, bodies: &rp::RigidBodySet, h: f64) -> Vec<(rp::RigidBodyHandle, bool, f64)> {
+        let k = self.cable.model.section.ea / self.cable.model.layout.element_length;
+        self.followers
+            .iter()
+            .filter(|f| f.dynamic)
+            .map(|f| (f.body, f.start, k * h * h / bodies.get(f.body).map_or(f64::INFINITY, |rb| rb.mass() as f64)))
+            .collect()
     }
 
     /// Gives the bodies this cable carries back to rapier (gravity,

@@ -2,9 +2,7 @@
 //! thin adapters that map entities to rapier handles and call the coupling
 //! core ([`crate::coupling`]).
 
-use super::components::{
-    CableAnchor, CableDescriptor, CableDiverged, CableSim, CableState, CarriedBody,
-};
+use super::components::{CableAnchor, CableDescriptor, CableDiverged, CableSim, CableState, CarriedBody};
 use super::CableSettings;
 use crate::cable::RopeBuilder;
 use crate::coupling::{self, rail_drive, Attach, BodyInputs, CableSpec, CoupledCable, Role};
@@ -33,44 +31,19 @@ pub(crate) fn init_cables(
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
-    let gravity = config
-        .iter()
-        .next()
-        .map_or(DVec3::new(0.0, -9.81, 0.0), |c| c.gravity.as_dvec3());
+    let gravity = config.iter().next().map_or(DVec3::new(0.0, -9.81, 0.0), |c| c.gravity.as_dvec3());
     let mut new: Vec<(Entity, &CableDescriptor)> = new.iter().collect();
     new.sort_by_key(|(e, _)| *e);
     let mut specs = Vec::new();
     let mut owners = Vec::new();
     for (entity, d) in new {
-        let attach = |a: &CableAnchor,
-                      end: &str|
-         -> Result<(Attach, Option<(Entity, RigidBodyHandle)>), String> {
+        let attach = |a: &CableAnchor, end: &str| -> Result<(Attach, Option<(Entity, RigidBodyHandle)>), String> {
             Ok(match a {
                 CableAnchor::Free => (Attach::Free, None),
-                CableAnchor::World { point, clamp } => (
-                    Attach::World {
-                        point: point.as_dvec3(),
-                        clamp: *clamp,
-                    },
-                    None,
-                ),
-                CableAnchor::Body {
-                    entity: be,
-                    anchor,
-                    clamp,
-                } => {
-                    let h = handles
-                        .get(*be)
-                        .map_err(|_| format!("{end} body {be} has no rapier rigid body"))?
-                        .0;
-                    (
-                        Attach::Body {
-                            body: h,
-                            anchor: anchor.as_dvec3(),
-                            clamp: *clamp,
-                        },
-                        Some((*be, h)),
-                    )
+                CableAnchor::World { point, clamp } => (Attach::World { point: point.as_dvec3(), clamp: *clamp }, None),
+                CableAnchor::Body { entity: be, anchor, clamp } => {
+                    let h = handles.get(*be).map_err(|_| format!("{end} body {be} has no rapier rigid body"))?.0;
+                    (Attach::Body { body: h, anchor: anchor.as_dvec3(), clamp: *clamp }, Some((*be, h)))
                 }
             })
         };
@@ -78,51 +51,25 @@ pub(crate) fn init_cables(
         let ((start, sb), (end, eb)) = match ends {
             Ok(x) => x,
             Err(message) => {
-                diverged.write(CableDiverged {
-                    entity,
-                    time: 0.0,
-                    message,
-                });
+                diverged.write(CableDiverged { entity, time: 0.0, message });
                 commands.entity(entity).remove::<CableDescriptor>();
                 continue;
             }
         };
-        let mut rope = RopeBuilder::new(d.length, d.segments, d.section, d.diameter)
-            .damping(d.damping)
-            .gravity(gravity);
+        let mut rope = RopeBuilder::new(d.length, d.segments, d.section, d.diameter).damping(d.damping).gravity(gravity);
         if let Some(ga) = d.shear_stiffness {
             rope = rope.shear_stiffness(ga);
         }
-        let path = d
-            .path
-            .as_ref()
-            .map(|p| p.iter().map(|v| v.as_dvec3()).collect());
-        specs.push(CableSpec {
-            rope,
-            path,
-            start,
-            end,
-            scheme: d.scheme.clone(),
-            exact: [None, None],
-        });
+        let path = d.path.as_ref().map(|p| p.iter().map(|v| v.as_dvec3()).collect());
+        specs.push(CableSpec { rope, path, start, end, scheme: d.scheme.clone(), exact: [None, None] });
         owners.push((entity, [sb, eb]));
     }
     let others: Vec<&CoupledCable> = existing.iter().map(|s| &s.coupled).collect();
-    let built = coupling::build_cables(
-        &specs,
-        &others,
-        &mut ctx.rigidbody_set.bodies,
-        &mut ctx.joints.impulse_joints,
-        &HashMap::new(),
-    );
+    let built = coupling::build_cables(&specs, &others, &mut ctx.rigidbody_set.bodies, &mut ctx.joints.impulse_joints, &HashMap::new());
     let bodies = &ctx.rigidbody_set.bodies;
     for ((entity, ends), r) in owners.into_iter().zip(built) {
         let mut fail = |message: String| {
-            diverged.write(CableDiverged {
-                entity,
-                time: 0.0,
-                message,
-            });
+            diverged.write(CableDiverged { entity, time: 0.0, message });
             commands.entity(entity).remove::<CableDescriptor>();
         };
         let mut cc = match r {
@@ -133,22 +80,14 @@ pub(crate) fn init_cables(
             }
         };
         // The carried bodies' rapier velocities become the chain's initial rates.
-        let velocity = |h: RigidBodyHandle| {
-            bodies.get(h).map_or((DVec3::ZERO, DVec3::ZERO), |rb| {
-                (rb.linvel().as_dvec3(), rb.angvel().as_dvec3())
-            })
-        };
+        let velocity = |h: RigidBodyHandle| bodies.get(h).map_or((DVec3::ZERO, DVec3::ZERO), |rb| (rb.linvel().as_dvec3(), rb.angvel().as_dvec3()));
         if let Err((_, e)) = cc.start_velocities(&velocity) {
             fail(e.to_string());
             continue;
         }
         let mut carried = Vec::new();
         let mut rail = None;
-        for (k, (be, h)) in ends
-            .iter()
-            .enumerate()
-            .filter_map(|(k, e)| e.map(|e| (k, e)))
-        {
+        for (k, (be, h)) in ends.iter().enumerate().filter_map(|(k, e)| e.map(|e| (k, e))) {
             let role = cc.role_of(h).expect("every body end has a role");
             carried.push((
                 be,
@@ -166,14 +105,7 @@ pub(crate) fn init_cables(
                 },
             ));
         }
-        commands.entity(entity).insert((
-            CableSim {
-                coupled: cc,
-                bodies: carried,
-                rail,
-            },
-            CableState::default(),
-        ));
+        commands.entity(entity).insert((CableSim { coupled: cc, bodies: carried, rail }, CableState::default()));
     }
 }
 
@@ -196,23 +128,11 @@ fn rail_motor(cc: &mut CoupledCable, motor: Option<JointMotor>, offset: f64) {
         MotorModel::ForceBased => 1.0,
     };
     let (k, c) = (m.stiffness as f64 * scale, m.damping as f64 * scale);
-    rail_drive(
-        cable,
-        k,
-        c,
-        offset,
-        m.target_pos as f64,
-        m.target_vel as f64,
-        m.max_force as f64,
-    );
+    rail_drive(cable, k, c, offset, m.target_pos as f64, m.target_vel as f64, m.max_force as f64);
 }
 
 /// What the user asks of a carried body through bevy_rapier's components.
-type InputComponents = (
-    Option<&'static ExternalForce>,
-    Option<&'static GravityScale>,
-    Option<&'static Damping>,
-);
+type InputComponents = (Option<&'static ExternalForce>, Option<&'static GravityScale>, Option<&'static Damping>);
 
 /// Advances every cable by the fixed step (the core's phase 1: before
 /// rapier's step).
@@ -239,11 +159,7 @@ pub(crate) fn step_cables(
     let mut given: HashMap<RigidBodyHandle, BodyInputs> = HashMap::new();
     for (_, sim) in &mut list {
         let sim = &mut **sim;
-        for (be, _) in sim
-            .bodies
-            .iter()
-            .filter(|(_, c)| matches!(c, CarriedBody::Lumped(_)))
-        {
+        for (be, _) in sim.bodies.iter().filter(|(_, c)| matches!(c, CarriedBody::Lumped(_))) {
             let (Ok((force, scale, damping)), Ok(h)) = (inputs.get(*be), handles.get(*be)) else {
                 continue;
             };
@@ -258,9 +174,7 @@ pub(crate) fn step_cables(
                 },
             );
         }
-        if let (Some(trolley), Some((_, Role::Trolley { offset, .. }))) =
-            (sim.rail, sim.coupled.roles[0])
-        {
+        if let (Some(trolley), Some((_, Role::Trolley { offset, .. }))) = (sim.rail, sim.coupled.roles[0]) {
             let motor = joints.get(trolley).ok().and_then(|j| match &j.data {
                 TypedJoint::PrismaticJoint(pj) => pj.motor().copied(),
                 _ => None,
@@ -269,41 +183,25 @@ pub(crate) fn step_cables(
         }
     }
     let mut refs: Vec<&mut CoupledCable> = list.iter_mut().map(|(_, s)| &mut s.coupled).collect();
-    let failures = coupling::step_cables(
-        &mut refs,
-        &mut ctx.rigidbody_set.bodies,
-        &mut ctx.joints.impulse_joints,
-        dt,
-        settings.substeps,
-        &|h| given.get(&h).copied().unwrap_or_default(),
-    );
+    let failures = coupling::step_cables(&mut refs, &mut ctx.rigidbody_set.bodies, &mut ctx.joints.impulse_joints, dt, settings.substeps, &|h| {
+        given.get(&h).copied().unwrap_or_default()
+    });
     for (i, t, e) in failures {
-        diverged.write(CableDiverged {
-            entity: list[i].0,
-            time: t,
-            message: e.to_string(),
-        });
+        diverged.write(CableDiverged { entity: list[i].0, time: t, message: e.to_string() });
     }
 }
 
 /// The core's phase 2, after rapier's step and before its writeback: the
 /// contact impulses rapier gave the carried bodies are kept for the next
 /// step, and the bodies are put on the cable's pose and velocity.
-pub(crate) fn write_bodies(
-    mut cables: Query<(Entity, &mut CableSim)>,
-    mut ctx: WriteRapierContext,
-) {
+pub(crate) fn write_bodies(mut cables: Query<(Entity, &mut CableSim)>, mut ctx: WriteRapierContext) {
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
     let mut list: Vec<(Entity, Mut<CableSim>)> = cables.iter_mut().collect();
     list.sort_by_key(|(e, _)| *e);
     let mut refs: Vec<&mut CoupledCable> = list.iter_mut().map(|(_, s)| &mut s.coupled).collect();
-    coupling::after_rapier(
-        &mut refs,
-        &mut ctx.rigidbody_set.bodies,
-        &ctx.simulation.narrow_phase,
-    );
+    coupling::after_rapier(&mut refs, &mut ctx.rigidbody_set.bodies, &ctx.simulation.narrow_phase);
 }
 
 /// Refreshes [`CableState`].
@@ -311,9 +209,7 @@ pub(crate) fn readout(mut cables: Query<(&CableSim, &mut CableState)>) {
     for (sim, mut st) in &mut cables {
         let c = &sim.cable;
         st.nodes = c.nodes().iter().map(|p| p.as_vec3()).collect();
-        st.tensions = (0..c.elements())
-            .map(|i| c.element_forces(i).tension as f32)
-            .collect();
+        st.tensions = (0..c.elements()).map(|i| c.element_forces(i).tension as f32).collect();
         st.stretched_length = c.stretched_length() as f32;
         st.energy = c.energy();
         st.time = c.time();
