@@ -37,7 +37,7 @@
 //!     the cable's pose and velocity.
 //!
 //!   A trolley's rail joint stays in rapier with its motor switched off
-//!   there; the adapter gives the motor to the cable ([`rail_drive`]).
+//!   there; the adapter gives the motor to the cable (`rail_drive`).
 //!   `LockedAxes` on a carried body are refused ([`CouplingError::LockedAxes`]).
 //!   Contact impulses are those rapier computes for a free body of the
 //!   carried body's mass, one step late: good for pushes and knocks, not a
@@ -137,6 +137,9 @@ pub enum Role {
     Explicit,
 }
 
+/// The body and its role at a cable's start and end (`None`: no body there).
+pub type EndRoles = [Option<(rp::RigidBodyHandle, Role)>; 2];
+
 /// What the user asks of a carried body besides its velocity (the plugin
 /// reads bevy_rapier's components; a scenario body has the defaults).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -222,8 +225,6 @@ pub struct CarriedLink {
     /// Impulse (N·s at the centre of mass) and angular impulse (N·m·s) that
     /// rapier's contacts gave the body in its last step.
     contact: (DVec3, DVec3),
-    /// Impulse applied in the last step (user + contacts), for probes.
-    pub last_impulse: (DVec3, DVec3),
 }
 
 /// A body that moves a cable end or takes its reaction explicitly.
@@ -251,7 +252,7 @@ pub struct CoupledCable {
     /// The cable.
     pub cable: Cable,
     /// Role of the body at the start and at the end (`None`: no body).
-    pub roles: [Option<(rp::RigidBodyHandle, Role)>; 2],
+    pub roles: EndRoles,
     /// Bodies that are links of the chain.
     pub carried: Vec<CarriedLink>,
     /// Bodies sampled every step (bases without a closed-form motion,
@@ -291,7 +292,7 @@ pub fn classify(
     existing: &[&CoupledCable],
     bodies: &rp::RigidBodySet,
     joints: &rp::ImpulseJointSet,
-) -> Vec<Result<[Option<(rp::RigidBodyHandle, Role)>; 2], CouplingError>> {
+) -> Vec<Result<EndRoles, CouplingError>> {
     let mut uses: HashMap<rp::RigidBodyHandle, usize> = HashMap::new();
     for s in specs {
         for a in [&s.start, &s.end] {
@@ -461,15 +462,6 @@ impl Coupling {
             .collect()
     }
 
-    /// Gives cable `i` the rapier velocities of the bodies it carries as its
-    /// initial rates ([`Cable::set_link_velocities`]: the rates of least
-    /// stiffness energy). Does nothing when they are all at rest. On error,
-    /// returns the body whose velocity the chain cannot take (or the first
-    /// moving one).
-    pub fn start_velocities(&mut self, i: usize, velocity: &dyn Fn(rp::RigidBodyHandle) -> (DVec3, DVec3)) -> Result<(), (rp::RigidBodyHandle, CableError)> {
-        self.cables[i].start_velocities(velocity)
-    }
-
     /// Phase 1 over every cable: [`step_cables`].
     pub fn step(
         &mut self,
@@ -543,21 +535,6 @@ impl CoupledCable {
             .collect()
     }
 
-    /// Gives the bodies this cable carries back to rapier (gravity,
-    /// sleeping and gyroscopic torques on again; `restore` gives each body's
-    /// gravity scale and damping). Call it when the cable is removed.
-    pub fn release(&self, bodies: &mut rp::RigidBodySet, restore: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs) {
-        for c in &self.carried {
-            if let Some(rb) = bodies.get_mut(c.body) {
-                let inp = restore(c.body);
-                rb.set_gravity_scale(inp.gravity_scale as f32, true);
-                rb.set_linear_damping(inp.linear_damping as f32);
-                rb.set_angular_damping(inp.angular_damping as f32);
-                rb.enable_gyroscopic_forces(true);
-                *rb.activation_mut() = rp::RigidBodyActivation::active();
-            }
-        }
-    }
 }
 
 /// Switches off on a carried rapier body what the cable solve does for it:
@@ -590,7 +567,7 @@ fn mute_motor(joints: &mut rp::ImpulseJointSet, joint: rp::ImpulseJointHandle) {
 /// Builds one cable from its spec and the roles of its end bodies.
 fn build(
     spec: &CableSpec,
-    roles: [Option<(rp::RigidBodyHandle, Role)>; 2],
+    roles: EndRoles,
     bodies: &rp::RigidBodySet,
     motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
 ) -> Result<CoupledCable, CouplingError> {
@@ -698,7 +675,6 @@ fn build(
                 mark: Some((rb.linvel(), rb.angvel())),
                 landing: (DVec3::ZERO, DVec3::ZERO),
                 contact: (DVec3::ZERO, DVec3::ZERO),
-                last_impulse: (DVec3::ZERO, DVec3::ZERO),
             }
         })
         .collect();
@@ -746,13 +722,14 @@ pub fn step_cables(
     for (ci, cc) in cables.iter_mut().enumerate().filter(|(_, c)| !c.failed) {
         let t = cc.cable.time();
         cc.cable.model.chain.loads.truncate(cc.fixed_loads);
+        // Rapier may have re-read the user's joint motor and body settings.
+        if let Some((_, Role::Trolley { joint, .. })) = cc.roles[0] {
+            mute_motor(joints, joint);
+        }
         for k in 0..cc.carried.len() {
             let Some(rb) = bodies.get_mut(cc.carried[k].body) else {
                 continue;
             };
-            if let Some((_, Role::Trolley { joint, .. })) = cc.roles[0] {
-                mute_motor(joints, joint);
-            }
             hand_to_cable(rb);
             let c = &mut cc.carried[k];
             let (_, r) = pose_of(rb);
@@ -767,7 +744,6 @@ pub fn step_cables(
                 }
             }
             c.contact = (DVec3::ZERO, DVec3::ZERO);
-            c.last_impulse = j;
             let input = inputs(c.body);
             let g = cc.cable.model.chain.gravity;
             let force = input.force + g * (c.mass * (input.gravity_scale - 1.0)) + j.0 / h;

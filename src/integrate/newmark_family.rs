@@ -117,7 +117,7 @@ pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
         ws.x[i] = a0;
     }
     let map = Affine { t: state.t + h, c_q: h * h * w * w, c_v: h * w, h };
-    let stiff = sys.max_frequency(&state.q).is_none_or(|omega| !(omega * h <= LINEARLY_IMPLICIT_STIFF_OMEGA));
+    let stiff = sys.max_frequency(&state.q).is_none_or(|omega| omega.is_nan() || omega * h > LINEARLY_IMPLICIT_STIFF_OMEGA);
     if stiff {
         linearised_at_start(sys, state, ws, map, stats)?;
     } else {
@@ -146,11 +146,10 @@ fn linearised_at_start<S: SecondOrderSystem + ?Sized>(
     let Affine { t, c_q, c_v, .. } = map;
     let n = state.dof();
     let eps = DIRECTION_FRACTION;
+    // The predicted configuration and velocity v_p; d = q_p − q.
+    newton::update_coordinates(ws, c_q, c_v);
     for i in 0..n {
-        // d = q_p − q and v_p, the predicted displacement and velocity.
-        ws.dq_sum[i] = ws.qb[i] + c_q * ws.x[i] - state.q[i];
-        ws.v[i] = ws.vb[i] + c_v * ws.x[i];
-        ws.q[i] = state.q[i] + ws.dq_sum[i];
+        ws.dq_sum[i] = ws.q[i] - state.q[i];
     }
     // Non-smooth laws on the branch of the predicted configuration, as the
     // one-correction form has them.
@@ -175,10 +174,7 @@ fn linearised_at_start<S: SecondOrderSystem + ?Sized>(
             ws.x[i] = (ws.q_new[i] - ws.qb[i]) / c_q;
         }
     }
-    for i in 0..n {
-        ws.q[i] = ws.qb[i] + c_q * ws.x[i];
-        ws.v[i] = ws.vb[i] + c_v * ws.x[i];
-    }
+    newton::update_coordinates(ws, c_q, c_v);
     Ok(())
 }
 

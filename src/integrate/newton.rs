@@ -232,7 +232,8 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-fn update_coordinates(ws: &mut Workspace, c_q: f64, c_v: f64) {
+/// `q = q_b + c_q x`, `v = v_b + c_v x` from the affine bases and `x`.
+pub(crate) fn update_coordinates(ws: &mut Workspace, c_q: f64, c_v: f64) {
     for i in 0..ws.x.len() {
         ws.q[i] = ws.qb[i] + c_q * ws.x[i];
         ws.v[i] = ws.vb[i] + c_v * ws.x[i];

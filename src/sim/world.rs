@@ -442,15 +442,15 @@ impl World {
             }
         }
         // Initial velocities of the carried bodies (after the static start).
-        for i in 0..core.cables.len() {
-            let exact = |h| {
-                let b = scenario.body(&name_of(&rapier, h)).expect("a scenario body");
-                (b.linear_velocity, b.angular_velocity)
-            };
-            if let Err((h, source)) = core.start_velocities(i, &exact) {
+        let exact = |h| {
+            let b = scenario.body(&name_of(&rapier, h)).expect("a scenario body");
+            (b.linear_velocity, b.angular_velocity)
+        };
+        for (cc, n) in core.cables.iter_mut().zip(&names) {
+            if let Err((h, source)) = cc.start_velocities(&exact) {
                 let name = name_of(&rapier, h);
                 let who = scenario.body(&name).expect("a scenario body");
-                return Err(SimError::InitialVelocity { file: file.clone(), location: who.location, body: name, cable: names[i].name.clone(), source: Box::new(source) });
+                return Err(SimError::InitialVelocity { file: file.clone(), location: who.location, body: name, cable: n.name.clone(), source: Box::new(source) });
             }
         }
         let substeps = sim.substeps.unwrap_or(1);
