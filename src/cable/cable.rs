@@ -3,7 +3,7 @@
 
 use super::chain::{LinkLoad, SpringLaw, StaticError};
 use super::spatial::V6;
-use super::rope::{RopeModel, ELEMENT_DOFS};
+use super::rope::{RopeLayout, RopeModel, ELEMENT_DOFS};
 use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
 use glam::{DMat3, DVec3};
 use thiserror::Error;
@@ -209,10 +209,17 @@ impl Cable {
     }
 
     fn check_sanity(&self) -> Result<(), CableError> {
-        let l = &self.model.layout;
         if !self.state.is_finite() {
             return Err(CableError::Diverged { time: self.state.t, reason: "non-finite state".into() });
         }
+        for (part, l) in std::iter::once(&self.model.layout).chain(self.model.parts.iter().map(|p| &p.layout)).enumerate() {
+            self.check_strain(part, l)?;
+        }
+        Ok(())
+    }
+
+    fn check_strain(&self, part: usize, l: &RopeLayout) -> Result<(), CableError> {
+        let which = if part == 0 { String::new() } else { format!("rope {part}, ") };
         for i in usize::from(l.free_start)..l.elements {
             let s = l.dof(i, 3);
             let gap = self.state.q[s];
@@ -222,7 +229,7 @@ impl Cable {
             if gap > l.element_length || (!tension_only && gap < -l.element_length) {
                 return Err(CableError::Diverged {
                     time: self.state.t,
-                    reason: format!("element {i} strained by {:.1} % (beyond any physical sense)", 100.0 * gap / l.element_length),
+                    reason: format!("{which}element {i} strained by {:.1} % (beyond any physical sense)", 100.0 * gap / l.element_length),
                 });
             }
         }
@@ -236,38 +243,22 @@ impl Cable {
 
     /// World positions of the `N + 1` nodes, m.
     pub fn nodes(&self) -> Vec<DVec3> {
-        self.model.nodes()
+        self.main_rope().nodes()
     }
 
     /// World velocities of the `N + 1` nodes, m/s.
     pub fn node_velocities(&self) -> Vec<DVec3> {
-        let l = &self.model.layout;
-        let ch = &self.model.chain;
-        let mut out: Vec<DVec3> = (0..l.elements)
-            .map(|i| {
-                ch.joint_point_velocity(l.dof(i, 0))
-            })
-            .collect();
-        if l.free_start {
-            out[0] = ch.link_point_velocity(l.element_link(0), DVec3::ZERO);
-        }
-        out.push(ch.link_point_velocity(l.element_link(l.elements - 1), DVec3::new(l.element_length, 0.0, 0.0)));
-        out
+        self.main_rope().node_velocities()
     }
 
     /// Position and velocity of the rope at arc length `s` (m, along the
     /// unstretched rope from the start), interpolated between nodes.
     pub fn point_at(&self, s: f64) -> (DVec3, DVec3) {
-        let (i, f) = self.locate(s);
-        let (p, v) = (self.nodes(), self.node_velocities());
-        (p[i].lerp(p[i + 1], f), v[i].lerp(v[i + 1], f))
+        self.main_rope().point_at(s)
     }
 
     fn locate(&self, s: f64) -> (usize, f64) {
-        let l = &self.model.layout;
-        let x = (s / l.element_length).clamp(0.0, l.elements as f64);
-        let i = (x.floor() as usize).min(l.elements - 1);
-        (i, x - i as f64)
+        locate(&self.model.layout, s)
     }
 
     /// Internal forces of element joint `i` (between element `i − 1` and
@@ -279,14 +270,32 @@ impl Cable {
     /// Axial tension (N) at arc length `s` (m): the force of the element
     /// joint nearest to `s`.
     pub fn tension_at(&self, s: f64) -> f64 {
-        let (i, f) = self.locate(s);
-        let i = if f > 0.5 { (i + 1).min(self.model.layout.elements - 1) } else { i };
-        self.element_forces(i).tension
+        self.main_rope().tension_at(s)
     }
 
     /// Current stretched length (polyline through the nodes), m.
     pub fn stretched_length(&self) -> f64 {
-        self.nodes().windows(2).map(|w| w[0].distance(w[1])).sum()
+        self.main_rope().stretched_length()
+    }
+
+    /// The ropes of this cable's chain: 1 plus the ropes grafted onto its
+    /// bodies ([`RopeModel::graft`], a sling's further legs).
+    pub fn ropes(&self) -> usize {
+        1 + self.model.parts.len()
+    }
+
+    /// Rope `part` of the chain (0: the cable's own rope; `k ≥ 1`: the
+    /// grafted rope `model.parts[k − 1]`), or `None` if there is no such part.
+    pub fn rope(&self, part: usize) -> Option<RopeView<'_>> {
+        if part == 0 {
+            return Some(self.main_rope());
+        }
+        let p = self.model.parts.get(part - 1)?;
+        Some(RopeView { cable: self, layout: p.layout, reversed: p.reversed, length: p.length })
+    }
+
+    fn main_rope(&self) -> RopeView<'_> {
+        RopeView { cable: self, layout: self.model.layout, reversed: false, length: self.model.length }
     }
 
     /// Kinetic energy of the rope and its lumped bodies, J.
@@ -526,6 +535,124 @@ impl Cable {
     /// Coordinates per element (6).
     pub const fn element_dofs() -> usize {
         ELEMENT_DOFS
+    }
+}
+
+/// Element and fraction of arc length `s` (m) along a rope laid out as `l`.
+fn locate(l: &RopeLayout, s: f64) -> (usize, f64) {
+    let x = (s / l.element_length).clamp(0.0, l.elements as f64);
+    let i = (x.floor() as usize).min(l.elements - 1);
+    (i, x - i as f64)
+}
+
+/// One rope of a cable's chain, in the direction its user described it
+/// ([`Cable::rope`]).
+#[derive(Clone, Copy)]
+pub struct RopeView<'a> {
+    cable: &'a Cable,
+    layout: RopeLayout,
+    reversed: bool,
+    length: f64,
+}
+
+impl RopeView<'_> {
+    /// Number of elements.
+    pub fn elements(&self) -> usize {
+        self.layout.elements
+    }
+
+    /// Unstretched length, m.
+    pub fn length(&self) -> f64 {
+        self.length
+    }
+
+    /// The chain's layout of this rope (element 0 is at the chain's side:
+    /// for a reversed rope, at the user's end).
+    pub fn layout(&self) -> &RopeLayout {
+        &self.layout
+    }
+
+    /// Whether the user's start is the chain layout's far end.
+    pub fn reversed(&self) -> bool {
+        self.reversed
+    }
+
+    /// Chain-side nodes (element ends) in the layout's order.
+    fn chain_nodes(&self, velocity: bool) -> Vec<DVec3> {
+        let l = &self.layout;
+        let ch = &self.cable.model.chain;
+        let point = |link: usize, local: DVec3| if velocity { ch.link_point_velocity(link, local) } else { ch.link_point(link, local) };
+        let mut out: Vec<DVec3> =
+            (0..l.elements).map(|i| if velocity { ch.joint_point_velocity(l.dof(i, 0)) } else { ch.joint_point(l.dof(i, 0)) }).collect();
+        if l.free_start {
+            out[0] = point(l.element_link(0), DVec3::ZERO);
+        }
+        out.push(point(l.element_link(l.elements - 1), DVec3::new(l.element_length, 0.0, 0.0)));
+        if self.reversed {
+            out.reverse();
+        }
+        out
+    }
+
+    /// World positions of the `N + 1` nodes from the user's start, m.
+    pub fn nodes(&self) -> Vec<DVec3> {
+        self.chain_nodes(false)
+    }
+
+    /// World velocities of the `N + 1` nodes from the user's start, m/s.
+    pub fn node_velocities(&self) -> Vec<DVec3> {
+        self.chain_nodes(true)
+    }
+
+    /// Position and velocity at arc length `s` (m, unstretched, from the
+    /// user's start), interpolated between nodes.
+    pub fn point_at(&self, s: f64) -> (DVec3, DVec3) {
+        let (i, f) = locate(&self.layout, s);
+        let (p, v) = (self.nodes(), self.node_velocities());
+        (p[i].lerp(p[i + 1], f), v[i].lerp(v[i + 1], f))
+    }
+
+    /// Internal forces of the element joint `i` counted from the user's
+    /// start (see [`RopeModel::element_forces`]). For a reversed rope the
+    /// joint between user elements `i − 1` and `i` is the chain's joint of
+    /// element `N − i`; at the user's joint 0 (the chain's tip) only the
+    /// tension is given: the end spring's pull along the last element.
+    pub fn element_forces(&self, i: usize) -> ElementForces {
+        let n = self.layout.elements;
+        let i = i.min(n - 1);
+        let l = &self.layout;
+        let (q, v) = (&self.cable.state.q, &self.cable.state.v);
+        let m = &self.cable.model;
+        if self.reversed && i == 0 {
+            // The user's start is the chain's tip: the end spring's pull
+            // along the last element there (zero for a free end).
+            let ch = &m.chain;
+            let link = l.element_link(n - 1);
+            let tension = ch.anchors.iter().filter(|a| a.link == link).fold(0.0, |acc, a| {
+                let p = ch.link_point(a.link, a.local_point);
+                let pv = ch.link_point_velocity(a.link, a.local_point);
+                let (target, target_v) = (a.target)(self.cable.state.t);
+                let force = -(p - target) * a.stiffness - (pv - target_v) * a.damping;
+                acc + force.dot(ch.link_rotation(link).x_axis)
+            });
+            return ElementForces { tension, ..Default::default() };
+        }
+        let k = if self.reversed { n - i } else { i };
+        m.element_forces_in(l, k, q, v)
+    }
+
+    /// Axial tension (N) at arc length `s` (m, from the user's start): the
+    /// force of the element joint nearest to `s`.
+    pub fn tension_at(&self, s: f64) -> f64 {
+        let n = self.layout.elements;
+        let (i, f) = locate(&self.layout, s);
+        let i = if f > 0.5 { (i + 1).min(n - 1) } else { i };
+        self.element_forces(i).tension
+    }
+
+    /// Current stretched length (polyline through the nodes), m.
+    pub fn stretched_length(&self) -> f64 {
+        self.nodes().windows(2).map(|w| w[0].distance(w[1])).sum()
     }
 }
 

@@ -280,6 +280,47 @@ pub struct LinkLoad {
     pub moment: DVec3,
 }
 
+/// A limb of a tree-shaped chain: the sub-joints from `first` up to the
+/// next limb's first (or the chain's end) form a serial branch whose first
+/// sub-joint hangs from link `parent` (`None`: from the base) instead of
+/// from link `first − 1`. A chain without limbs is serial. The sub-joints
+/// are in depth-first order: `parent < first`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limb {
+    /// First sub-joint of the limb.
+    pub first: usize,
+    /// Link the limb hangs from (`None`: the base).
+    pub parent: Option<usize>,
+}
+
+/// Carry of the tip-to-base sweep that a limb hands to its parent link:
+/// composite load, load tangent blocks and the articulated-body carry.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LimbCarry {
+    fc: V6,
+    ha: DMat3,
+    hb: DMat3,
+    inertia: M6,
+    bias: V6,
+}
+
+impl Default for LimbCarry {
+    /// Zero (glam's `DMat3::default()` is the identity).
+    fn default() -> Self {
+        LimbCarry { fc: V6::ZERO, ha: DMat3::ZERO, hb: DMat3::ZERO, inertia: M6::ZERO, bias: V6::ZERO }
+    }
+}
+
+impl LimbCarry {
+    fn add(&mut self, o: &LimbCarry) {
+        self.fc += o.fc;
+        self.ha += o.ha;
+        self.hb += o.hb;
+        self.inertia += o.inertia;
+        self.bias += o.bias;
+    }
+}
+
 /// The exact inputs of the link-slot layout: sub-joint count, the links of
 /// the loads then the anchors (in order), the rotation springs' first
 /// sub-joints.
@@ -289,6 +330,7 @@ struct SlotKey {
     n: usize,
     links: Vec<usize>,
     springs: Vec<usize>,
+    limbs: Vec<Limb>,
 }
 
 /// Pose of a sub-joint's link, rebuilt by every kinematics pass.
@@ -392,6 +434,18 @@ pub struct Chain {
     /// Objective bending–torsion laws replacing the per-angle springs of
     /// their sub-joints.
     pub rotation_springs: Vec<RotationSpring>,
+    /// Limbs (tree branches), sorted by their first sub-joint; empty for a
+    /// serial chain (see [`Limb`], [`Chain::add_limb`]).
+    limbs: Vec<Limb>,
+    /// Per sub-joint (only when there are limbs): index into the limb
+    /// scratch arrays if limbs hang from this link, else `u32::MAX`.
+    limb_parent: Vec<u32>,
+    /// Per parent link: the sweep carry of its limbs, and the forward
+    /// passes' acceleration there.
+    limb_carry: Vec<LimbCarry>,
+    limb_acc: Vec<V6>,
+    /// Per sub-joint (only when there are limbs): `true` where a limb starts.
+    limb_start: Vec<bool>,
     /// Per sub-joint: index of the rotation spring whose block starts here,
     /// [`BLOCK_INNER`] inside a block, `u32::MAX` for a single sub-joint.
     pub(crate) block: Vec<u32>,
@@ -452,6 +506,11 @@ impl Chain {
             loads: Vec::new(),
             joint_forces: vec![0.0; n],
             rotation_springs: Vec::new(),
+            limbs: Vec::new(),
+            limb_parent: Vec::new(),
+            limb_carry: Vec::new(),
+            limb_acc: Vec::new(),
+            limb_start: Vec::new(),
             block: vec![u32::MAX; n],
             rot_scratch: Vec::new(),
             spring_order: Vec::new(),
@@ -486,7 +545,8 @@ impl Chain {
             && key.links.len() == self.loads.len() + self.anchors.len()
             && key.springs.len() == self.rotation_springs.len()
             && key.links.iter().copied().eq(self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)))
-            && key.springs.iter().copied().eq(self.rotation_springs.iter().map(|r| r.first));
+            && key.springs.iter().copied().eq(self.rotation_springs.iter().map(|r| r.first))
+            && key.limbs == self.limbs;
         if same {
             return;
         }
@@ -496,6 +556,27 @@ impl Chain {
         self.slot_key.links.extend(self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)));
         self.slot_key.springs.clear();
         self.slot_key.springs.extend(self.rotation_springs.iter().map(|r| r.first));
+        self.slot_key.limbs.clone_from(&self.limbs);
+        self.limb_parent.clear();
+        self.limb_start.clear();
+        let mut parents = 0u32;
+        if !self.limbs.is_empty() {
+            self.limb_parent.resize(n, u32::MAX);
+            self.limb_start.resize(n, false);
+            for l in &self.limbs {
+                self.limb_start[l.first] = true;
+                if let Some(p) = l.parent {
+                    if self.limb_parent[p] == u32::MAX {
+                        self.limb_parent[p] = parents;
+                        parents += 1;
+                    }
+                }
+            }
+        }
+        self.limb_carry.clear();
+        self.limb_carry.resize(parents as usize, LimbCarry::default());
+        self.limb_acc.clear();
+        self.limb_acc.resize(parents as usize, V6::ZERO);
         self.nonsmooth.clear();
         self.nonsmooth.extend((0..n as u32).filter(|&s| self.joints[s as usize].law != SpringLaw::Linear));
         self.poses.resize(n, Pose::default());
@@ -531,7 +612,12 @@ impl Chain {
         self.rot_scratch.resize(self.rotation_springs.len(), (DMat3::ZERO, DMat3::ZERO));
         for (k, rs) in self.rotation_springs.iter().enumerate() {
             let f = rs.first;
-            if f + 2 < n && self.link_slot[f] == u32::MAX && self.link_slot[f + 1] == u32::MAX {
+            // A block never straddles a limb start or a limb's parent link.
+            let tree_free = || {
+                self.limbs.is_empty()
+                    || (!self.limb_start[f + 1] && !self.limb_start[f + 2] && self.limb_parent[f..f + 3].iter().all(|x| *x == u32::MAX))
+            };
+            if f + 2 < n && self.link_slot[f] == u32::MAX && self.link_slot[f + 1] == u32::MAX && tree_free() {
                 self.block[f] = k as u32;
                 self.block[f + 1] = BLOCK_INNER;
                 self.block[f + 2] = BLOCK_INNER;
@@ -577,8 +663,23 @@ impl Chain {
         let mut prev_rot = base.rotation;
         let mut prev_pos = bp;
         self.base_pose = (prev_rot, prev_pos);
+        let (base_vel, base_acc) = (prev_vel, prev_acc);
+        let tree = !self.limbs.is_empty();
+        let mut next_limb = 0;
         let mut next_spring = 0;
         for (s, j) in self.joints.iter().enumerate() {
+            if tree && self.limb_start[s] {
+                // A limb starts here: its parent is not link s − 1.
+                let limb = self.limbs[next_limb];
+                next_limb += 1;
+                match limb.parent {
+                    None => (prev_vel, prev_acc, prev_rot, prev_pos) = (base_vel, base_acc, self.base_pose.0, self.base_pose.1),
+                    Some(p) => {
+                        let ps = self.poses[p];
+                        (prev_vel, prev_acc, prev_rot, prev_pos) = (ps.vel, self.limb_acc[self.limb_parent[p] as usize], ps.rot, ps.pos);
+                    }
+                }
+            }
             let (rj, pj) = j.frame(prev_rot, prev_pos);
             // Principal axes (every rope sub-joint) are column picks.
             let axis_id = axis_id(j.axis);
@@ -645,11 +746,68 @@ impl Chain {
                 }
                 self.rot_scratch[k as usize].0 = a_mat;
             }
+            if tree && self.limb_parent[s] != u32::MAX {
+                self.limb_acc[self.limb_parent[s] as usize] = acc;
+            }
             prev_vel = vel;
             prev_acc = acc;
             prev_rot = rot;
             prev_pos = pos;
         }
+    }
+
+    /// The pose (orientation, origin relative to [`Chain::origin`]) of the
+    /// link sub-joint `s` hangs from, at the last kinematics pass.
+    fn parent_pose(&self, s: usize) -> (DMat3, DVec3) {
+        match self.parent_of(s) {
+            None => self.base_pose,
+            Some(p) => (self.poses[p].rot, self.poses[p].pos),
+        }
+    }
+
+    /// The link sub-joint `s` hangs from (`None`: the base).
+    pub fn parent_of(&self, s: usize) -> Option<usize> {
+        match self.limbs.binary_search_by_key(&s, |l| l.first) {
+            Ok(k) => self.limbs[k].parent,
+            Err(_) => s.checked_sub(1),
+        }
+    }
+
+    #[cfg(test)]
+    pub(crate) fn clear_limbs(&mut self) {
+        self.limbs.clear();
+        self.slot_key.built = false;
+    }
+
+    /// The limbs of a tree-shaped chain (empty for a serial chain).
+    pub fn limbs(&self) -> &[Limb] {
+        &self.limbs
+    }
+
+    /// Appends `joints` as a new limb hanging from link `parent` (`None`:
+    /// the base); returns the index of its first sub-joint. Anchors, loads
+    /// and rotation springs of the limb are added by the caller with their
+    /// sub-joint indices shifted by that index.
+    pub fn add_limb(&mut self, joints: Vec<SubJoint>, parent: Option<usize>) -> Result<usize, String> {
+        let first = self.joints.len();
+        if joints.is_empty() {
+            return Err("a limb needs at least one sub-joint".into());
+        }
+        if let Some(p) = parent {
+            if p >= first {
+                return Err(format!("limb parent link {p} is not in the chain ({first} sub-joints)"));
+            }
+        }
+        let n = joints.len();
+        self.joints.extend(joints);
+        self.joint_forces.resize(first + n, 0.0);
+        if first > 0 {
+            self.limbs.push(Limb { first, parent });
+        } else if parent.is_some() {
+            return Err("the first sub-joints of a chain hang from its base".into());
+        }
+        self.slot_key.built = false;
+        Ok(first)
     }
 
     /// World position of a point given in the frame of link `s` (after the
@@ -678,7 +836,7 @@ impl Chain {
 
     /// Joint point of sub-joint `s` in the world, m.
     pub fn joint_point(&self, s: usize) -> DVec3 {
-        let (rot, pos) = if s == 0 { self.base_pose } else { (self.poses[s - 1].rot, self.poses[s - 1].pos) };
+        let (rot, pos) = self.parent_pose(s);
         let offset = self.joints[s].offset;
         pos + rot * offset + self.origin
     }
@@ -777,8 +935,27 @@ impl Chain {
         let (mut ha, mut hb) = (DMat3::ZERO, DMat3::ZERO);
         let (mut hs, mut hb2) = (DMat3::ZERO, DMat3::ZERO);
         let mut aba = AbaCarry::default();
+        let tree = !self.limbs.is_empty();
+        let mut base_extra = V6::ZERO;
+        if tree {
+            self.limb_carry.iter_mut().for_each(|c| *c = LimbCarry::default());
+        }
+        let mut next_limb = self.limbs.len();
         for s in (0..n).rev() {
             let slot = self.link_slot[s];
+            if tree && self.limb_parent[s] != u32::MAX {
+                // The limbs hanging from this link.
+                let c = self.limb_carry[self.limb_parent[s] as usize];
+                fc += c.fc;
+                ha += c.ha;
+                hb += c.hb;
+                hs = (ha + ha.transpose()) * 0.5;
+                hb2 = hb * 0.5;
+                if solve.is_some() {
+                    aba.inertia += c.inertia;
+                    aba.bias += c.bias;
+                }
+            }
             if slot != u32::MAX {
                 let ls = &self.links[slot as usize];
                 fc += ls.f;
@@ -805,8 +982,19 @@ impl Chain {
                     self.eliminate(&mut aba, s, c_v, c_q, r)?;
                 }
             }
+            if tree && self.limb_start[s] {
+                // The limb is done: hand its carry to its parent link.
+                next_limb -= 1;
+                let carry = LimbCarry { fc, ha, hb, inertia: aba.inertia, bias: aba.bias };
+                match self.limbs[next_limb].parent {
+                    None => base_extra += fc,
+                    Some(p) => self.limb_carry[self.limb_parent[p] as usize].add(&carry),
+                }
+                (fc, ha, hb, hs, hb2) = (V6::ZERO, DMat3::ZERO, DMat3::ZERO, DMat3::ZERO, DMat3::ZERO);
+                aba = AbaCarry::default();
+            }
         }
-        self.base_load = fc;
+        self.base_load = fc + base_extra;
         Ok(())
     }
 
@@ -821,8 +1009,26 @@ impl Chain {
     /// through `U_s = Ĩ_s S_s − c_q G_s S_s`: no 6×6 geometric block is formed.
     pub fn solve_into(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         let mut aba = AbaCarry::default();
+        let tree = !self.limbs.is_empty();
+        if tree {
+            self.limb_carry.iter_mut().for_each(|c| *c = LimbCarry::default());
+        }
+        let mut next_limb = self.limbs.len();
         for s in (0..self.joints.len()).rev() {
+            if tree && self.limb_parent[s] != u32::MAX {
+                let c = self.limb_carry[self.limb_parent[s] as usize];
+                aba.inertia += c.inertia;
+                aba.bias += c.bias;
+            }
             self.eliminate(&mut aba, s, c_v, c_q, b)?;
+            if tree && self.limb_start[s] {
+                next_limb -= 1;
+                if let Some(p) = self.limbs[next_limb].parent {
+                    let carry = LimbCarry { inertia: aba.inertia, bias: aba.bias, ..Default::default() };
+                    self.limb_carry[self.limb_parent[p] as usize].add(&carry);
+                }
+                aba = AbaCarry::default();
+            }
         }
         self.forward_solve(x);
         Ok(())
@@ -850,11 +1056,27 @@ impl Chain {
     }
 
     /// Base-to-tip half of the articulated-body solve.
-    fn forward_solve(&self, x: &mut [f64]) {
+    fn forward_solve(&mut self, x: &mut [f64]) {
         let mut acc = V6::ZERO;
         let n = self.rows.len();
+        let tree = !self.limbs.is_empty();
+        let mut next_limb = 0;
         let mut s = 0;
         while s < n {
+            if tree {
+                if s > 0 && self.limb_parent[s - 1] != u32::MAX {
+                    // (Blocks never contain a parent link: s − 1 was done
+                    // alone, and `acc` is its acceleration.)
+                    self.limb_acc[self.limb_parent[s - 1] as usize] = acc;
+                }
+                if self.limb_start[s] {
+                    acc = match self.limbs[next_limb].parent {
+                        None => V6::ZERO,
+                        Some(p) => self.limb_acc[self.limb_parent[p] as usize],
+                    };
+                    next_limb += 1;
+                }
+            }
             match self.block[s] {
                 u32::MAX | BLOCK_INNER => {
                     let row = &self.rows[s];
@@ -1093,7 +1315,22 @@ impl Chain {
     pub(crate) fn link_update(&self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) {
         let (mut prev_rot, mut prev_pos) = self.base_pose;
         let mut tw = V6::ZERO;
+        let tree = !self.limbs.is_empty();
+        let mut stash = vec![(V6::ZERO, DMat3::IDENTITY, DVec3::ZERO); self.limb_acc.len()];
+        let mut next_limb = 0;
         for (s, j) in self.joints.iter().enumerate() {
+            if tree {
+                if s > 0 && self.limb_parent[s - 1] != u32::MAX {
+                    stash[self.limb_parent[s - 1] as usize] = (tw, prev_rot, prev_pos);
+                }
+                if self.limb_start[s] {
+                    (tw, prev_rot, prev_pos) = match self.limbs[next_limb].parent {
+                        None => (V6::ZERO, self.base_pose.0, self.base_pose.1),
+                        Some(p) => stash[self.limb_parent[p] as usize],
+                    };
+                    next_limb += 1;
+                }
+            }
             let dq = scale * dx[s];
             tw = tw + self.rows[s].s * dq;
             let pose = &self.poses[s];

@@ -20,7 +20,7 @@
 //! spring (2GJ/L_e: the half element up to the pin); a clamp doubles the
 //! first joint's stiffnesses likewise.
 
-use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkMass, RotationSpring, SpringLaw, SubJoint};
+use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkLoad, LinkMass, RotationSpring, SpringLaw, SubJoint};
 use super::cable::ElementForces;
 use super::material::RopeSection;
 use glam::{DMat3, DQuat, DVec3, EulerRot};
@@ -210,6 +210,25 @@ impl RopeLayout {
     }
 }
 
+/// A further rope in the same chain, grafted as a limb onto a body of it
+/// ([`RopeModel::graft`]): a second leg of a sling, a second rope on a hub.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RopePart {
+    /// Where its elements are in the chain (element 0 at the body it hangs
+    /// from).
+    pub layout: RopeLayout,
+    /// Section properties.
+    pub section: RopeSection,
+    /// Diameter, m.
+    pub diameter: f64,
+    /// Unstretched length, m.
+    pub length: f64,
+    /// The rope as its user described it runs the other way: from the far
+    /// end (its start) to the body (its end). Queries by arc length and node
+    /// lists are given in the user's direction.
+    pub reversed: bool,
+}
+
 /// A built rope: its chain and initial coordinates.
 #[derive(Debug, Clone)]
 pub struct RopeModel {
@@ -227,6 +246,9 @@ pub struct RopeModel {
     pub diameter: f64,
     /// Unstretched length, m.
     pub length: f64,
+    /// Further ropes grafted onto bodies of this chain (part `k ≥ 1` is
+    /// `parts[k − 1]`; part 0 is the rope described by `layout`).
+    pub parts: Vec<RopePart>,
 }
 
 fn check(name: &'static str, value: f64, positive: bool) -> Result<(), RopeError> {
@@ -625,6 +647,7 @@ impl RopeBuilder {
             shear_stiffness: ga,
             diameter: self.diameter,
             length: self.length,
+            parts: Vec::new(),
         })
     }
 }
@@ -657,6 +680,66 @@ fn resample(path: &[DVec3], n: usize) -> Result<Vec<DVec3>, RopeError> {
 }
 
 impl RopeModel {
+    /// Grafts `other` onto this chain as a limb hanging from the body at
+    /// `at` (a body of this chain), and returns its part number
+    /// (see [`RopeModel::parts`]). `other` must have been built with a
+    /// fixed pinned or clamped start at the attachment point on the body
+    /// (with the body's orientation as the base frame for a clamp); its end
+    /// may be anything but a body (pinned or clamped to the world: then the
+    /// chain closes a loop through an implicit anchor spring, as a rope
+    /// pinned at both ends does). The pin or clamp then moves with the body.
+    /// Both chains must be at their initial coordinates and have the same
+    /// gravity. `reversed`: the rope as its user described it runs from
+    /// `other`'s end to the body.
+    pub fn graft(&mut self, other: RopeModel, at: &BodyInChain, reversed: bool) -> Result<usize, RopeError> {
+        let base = match &other.chain.base {
+            BaseMotion::Fixed(b) if other.layout.start_body.is_none() && !other.layout.free_start => *b,
+            _ => return Err(RopeError::InvalidPath("a grafted rope must start at a fixed pin or clamp on the body".into())),
+        };
+        if other.layout.end_body.is_some() {
+            return Err(RopeError::InvalidPath("a grafted rope cannot carry a body of its own at its end".into()));
+        }
+        if other.chain.gravity != self.chain.gravity {
+            return Err(RopeError::InvalidPath("a grafted rope must have the chain's gravity".into()));
+        }
+        if at.link >= self.chain.len() {
+            return Err(RopeError::InvalidPath(format!("no link {} to graft onto", at.link)));
+        }
+        // The body link's pose at the initial coordinates.
+        let n0 = self.q0.len();
+        let zeros = vec![0.0; n0];
+        let mut r = vec![0.0; n0];
+        self.chain.residual_into(0.0, &self.q0, &zeros, &zeros, &mut r).map_err(|e| RopeError::InvalidPath(format!("initial state: {e}")))?;
+        let (rl, pl) = (self.chain.link_rotation(at.link), self.chain.link_point(at.link, DVec3::ZERO));
+        let RopeModel { chain: oc, layout: ol, q0: oq0, section, diameter, length, .. } = other;
+        let mut joints = oc.joints;
+        // Re-express the first joint frame in the body link's frame.
+        let (rb, pb) = (base.rotation, base.position);
+        let j0 = &mut joints[0];
+        let (rj, pj) = (rb * j0.pre_rotation, pb + rb * j0.offset);
+        j0.pre_rotation = rl.transpose() * rj;
+        j0.offset = rl.transpose() * (pj - pl);
+        let first = self.chain.add_limb(joints, Some(at.link)).map_err(RopeError::InvalidPath)?;
+        for (k, f) in oc.joint_forces.iter().enumerate() {
+            self.chain.joint_forces[first + k] = *f;
+        }
+        self.chain.anchors.extend(oc.anchors.into_iter().map(|a| AnchorSpring { link: a.link + first, ..a }));
+        self.chain.loads.extend(oc.loads.into_iter().map(|l| LinkLoad { link: l.link + first, ..l }));
+        self.chain.rotation_springs.extend(oc.rotation_springs.into_iter().map(|rs| RotationSpring { first: rs.first + first, ..rs }));
+        self.chain.rotation_springs.sort_by_key(|rs| rs.first);
+        self.chain.max_frequency = match (self.chain.max_frequency, oc.max_frequency) {
+            (Some(a), Some(b)) => Some(a.max(b)),
+            _ => None,
+        };
+        self.q0.extend(oq0);
+        let layout = RopeLayout { first: ol.first + first, ..ol };
+        self.parts.push(RopePart { layout, section, diameter, length, reversed });
+        let n = self.q0.len();
+        let (zeros, mut r) = (vec![0.0; n], vec![0.0; n]);
+        self.chain.residual_into(0.0, &self.q0, &zeros, &zeros, &mut r).map_err(|e| RopeError::InvalidPath(format!("initial state: {e}")))?;
+        Ok(self.parts.len())
+    }
+
     /// Internal forces of element joint `i` (between element `i − 1` and
     /// `i`; joint 0 holds the start; all zero for a free start) at `(q, v)`:
     /// what the outboard part of the rope exerts on the inboard part at the
@@ -666,7 +749,12 @@ impl RopeModel {
     /// ([`Chain::joint_moment`]), objective for any rotation. Reads the
     /// kinematics of the last residual evaluation (current after a step).
     pub fn element_forces(&self, i: usize, q: &[f64], v: &[f64]) -> ElementForces {
-        let l = &self.layout;
+        self.element_forces_in(&self.layout, i, q, v)
+    }
+
+    /// [`RopeModel::element_forces`] of element joint `i` of the rope laid
+    /// out as `l` in this chain (the main rope or a grafted part).
+    pub(crate) fn element_forces_in(&self, l: &RopeLayout, i: usize, q: &[f64], v: &[f64]) -> ElementForces {
         if i == 0 && l.free_start {
             return ElementForces::default();
         }
