@@ -691,6 +691,40 @@ impl RopeModel {
     /// Both chains must be at their initial coordinates and have the same
     /// gravity. `reversed`: the rope as its user described it runs from
     /// `other`'s end to the body.
+    ///
+    /// A two-leg sling: 1 t on two 10 m steel legs from anchors 12 m apart.
+    /// ```
+    /// use bevy_rapier_cable::cable::*;
+    /// use bevy_rapier_cable::integrate::Scheme;
+    /// use glam::{DMat3, DVec3};
+    /// use std::sync::Arc;
+    ///
+    /// let steel = preset("steel_wire_rope_6x36_iwrc", 0.02).unwrap();
+    /// let (a, b, apex) = (DVec3::new(-6.0, 0.0, 0.0), DVec3::new(6.0, 0.0, 0.0), DVec3::new(0.0, -8.0, 0.0));
+    /// let fixed = |p| RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, p)));
+    /// // Leg 0 carries the payload (centre of mass at the attachment point).
+    /// let mut model = RopeBuilder::new(10.0, 10, steel, 0.02)
+    ///     .start(fixed(a))
+    ///     .path(vec![a, apex])
+    ///     .end(RopeEnd::Body { body: LumpedBody::sphere(1000.0, 0.3, apex), anchor: DVec3::ZERO, clamp: false })
+    ///     .build()?;
+    /// let payload = model.layout.end_body.unwrap();
+    /// // Leg 1, built from the payload to its anchor, grafted onto the payload.
+    /// let leg = RopeBuilder::new(10.0, 10, steel, 0.02)
+    ///     .start(fixed(apex))
+    ///     .path(vec![apex, b])
+    ///     .end(RopeEnd::Pinned(Arc::new(move |_| (b, DVec3::ZERO))))
+    ///     .build()?;
+    /// let part = model.graft(leg, &payload, true)?;
+    /// let mut cable = Cable::new(model, Scheme::default()).unwrap();
+    /// for _ in 0..30 {
+    ///     cable.step(1.0 / 60.0).unwrap();
+    /// }
+    /// let leg1 = cable.rope(part).unwrap();
+    /// assert!(leg1.nodes()[0].distance(b) < 1e-3); // node 0 is the user's start
+    /// assert!(leg1.tension_at(0.0) > 0.0);
+    /// # Ok::<(), RopeError>(())
+    /// ```
     pub fn graft(&mut self, other: RopeModel, at: &BodyInChain, reversed: bool) -> Result<usize, RopeError> {
         let base = match &other.chain.base {
             BaseMotion::Fixed(b) if other.layout.start_body.is_none() && !other.layout.free_start => *b,
