@@ -798,13 +798,14 @@ impl Chain {
                 return Err(format!("limb parent link {p} is not in the chain ({first} sub-joints)"));
             }
         }
+        if first == 0 && parent.is_some() {
+            return Err("the first sub-joints of a chain hang from its base".into());
+        }
         let n = joints.len();
         self.joints.extend(joints);
         self.joint_forces.resize(first + n, 0.0);
         if first > 0 {
             self.limbs.push(Limb { first, parent });
-        } else if parent.is_some() {
-            return Err("the first sub-joints of a chain hang from its base".into());
         }
         self.slot_key.built = false;
         Ok(first)
