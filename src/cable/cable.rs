@@ -579,15 +579,7 @@ impl RopeView<'_> {
 
     /// Chain-side nodes (element ends) in the layout's order.
     fn chain_nodes(&self, velocity: bool) -> Vec<DVec3> {
-        let l = &self.layout;
-        let ch = &self.cable.model.chain;
-        let point = |link: usize, local: DVec3| if velocity { ch.link_point_velocity(link, local) } else { ch.link_point(link, local) };
-        let mut out: Vec<DVec3> =
-            (0..l.elements).map(|i| if velocity { ch.joint_point_velocity(l.dof(i, 0)) } else { ch.joint_point(l.dof(i, 0)) }).collect();
-        if l.free_start {
-            out[0] = point(l.element_link(0), DVec3::ZERO);
-        }
-        out.push(point(l.element_link(l.elements - 1), DVec3::new(l.element_length, 0.0, 0.0)));
+        let mut out = self.cable.model.nodes_in(&self.layout, velocity);
         if self.reversed {
             out.reverse();
         }

@@ -804,12 +804,21 @@ impl RopeModel {
     /// World positions of the `N + 1` nodes (element ends) after the last
     /// residual evaluation of the chain, m.
     pub fn nodes(&self) -> Vec<DVec3> {
-        let l = &self.layout;
-        let mut out: Vec<DVec3> = (0..l.elements).map(|i| self.chain.joint_point(l.dof(i, 0))).collect();
+        self.nodes_in(&self.layout, false)
+    }
+
+    /// World positions (m) or, with `velocity`, velocities (m/s) of the
+    /// `N + 1` nodes of the rope laid out as `l` in this chain (the main
+    /// rope or a grafted part), in the layout's order.
+    pub(crate) fn nodes_in(&self, l: &RopeLayout, velocity: bool) -> Vec<DVec3> {
+        let ch = &self.chain;
+        let point = |link: usize, local: DVec3| if velocity { ch.link_point_velocity(link, local) } else { ch.link_point(link, local) };
+        let mut out: Vec<DVec3> =
+            (0..l.elements).map(|i| if velocity { ch.joint_point_velocity(l.dof(i, 0)) } else { ch.joint_point(l.dof(i, 0)) }).collect();
         if l.free_start {
-            out[0] = self.chain.link_point(l.element_link(0), DVec3::ZERO);
+            out[0] = point(l.element_link(0), DVec3::ZERO);
         }
-        out.push(self.chain.link_point(l.element_link(l.elements - 1), DVec3::new(l.element_length, 0.0, 0.0)));
+        out.push(point(l.element_link(l.elements - 1), DVec3::new(l.element_length, 0.0, 0.0)));
         out
     }
 
