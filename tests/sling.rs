@@ -8,6 +8,10 @@ use bevy_rapier_cable::integrate::Scheme;
 use glam::{DMat3, DVec3};
 use std::sync::Arc;
 
+#[path = "common/irvine.rs"]
+mod irvine;
+use irvine::irvine_leg;
+
 const G: f64 = 9.81;
 
 fn steel20() -> RopeSection {
@@ -40,27 +44,6 @@ fn sling(anchors: &[DVec3], apex: DVec3, mass: f64, n: usize, section: RopeSecti
     }
 
     Cable::new(model, Scheme::default()).unwrap()
-}
-
-/// Elastic catenary (Irvine) of one leg hanging between its top anchor and
-/// the apex, with the apex pulled down by `v0` (N): unstretched length `l`,
-/// weight `w` (N/m), axial stiffness `ea`, horizontal span `span`. Returns
-/// (the depth of the apex below the anchor, the horizontal force H).
-fn irvine_leg(l: f64, w: f64, ea: f64, span: f64, v0: f64) -> (f64, f64) {
-    let x = |h: f64| h * l / ea + h / w * (((v0 + w * l) / h).asinh() - (v0 / h).asinh());
-    let (mut lo, mut hi) = (1e-6f64, 1e9f64);
-    for _ in 0..200 {
-        let mid = (lo * hi).sqrt();
-        if x(mid) < span {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    let h = (lo * hi).sqrt();
-    let root = |v: f64| (1.0 + (v / h).powi(2)).sqrt();
-    let depth = v0 * l / ea + w * l * l / (2.0 * ea) + h / w * (root(v0 + w * l) - root(v0));
-    (depth, h)
 }
 
 /// Statics of a symmetric two-leg sling (legs 10 m, anchors 12 m apart,
@@ -173,3 +156,4 @@ fn two_leg_sling_swings_about_the_anchor_line_at_the_frame_step() {
     assert!(err.abs() < 1e-3, "sling swing period {measured} vs {period}");
     assert!(worst_t < 1e-3, "tension changed by {worst_t:e} of its static value");
 }
+

@@ -257,10 +257,6 @@ impl Cable {
         self.main_rope().point_at(s)
     }
 
-    fn locate(&self, s: f64) -> (usize, f64) {
-        locate(&self.model.layout, s)
-    }
-
     /// Internal forces of element joint `i` (between element `i − 1` and
     /// `i`; joint 0 holds the start), see [`RopeModel::element_forces`].
     pub fn element_forces(&self, i: usize) -> ElementForces {
@@ -343,10 +339,24 @@ impl Cable {
     /// clamped to `[0, length]`). Like [`Cable::add_point_load`], they stay
     /// until [`Cable::clear_loads`].
     pub fn add_point_load_and_moment(&mut self, s: f64, force: DVec3, moment: DVec3) {
-        let l = &self.model.layout;
-        let (i, f) = self.locate(s);
+        let added = self.add_rope_point_load(0, s, force, moment);
+        debug_assert!(added, "rope 0 exists");
+    }
+
+    /// [`Cable::add_point_load_and_moment`] on rope `rope` of the chain
+    /// ([`Cable::rope`]), at arc length `s` (m) from that rope's start as
+    /// its user described it. Returns `false` (and adds nothing) when there
+    /// is no such rope.
+    #[must_use]
+    pub fn add_rope_point_load(&mut self, rope: usize, s: f64, force: DVec3, moment: DVec3) -> bool {
+        let Some(view) = self.rope(rope) else {
+            return false;
+        };
+        let (l, reversed, length) = (*view.layout(), view.reversed(), view.length());
+        let (i, f) = locate(&l, if reversed { length - s } else { s });
         let link = l.element_link(i);
         self.model.chain.loads.push(LinkLoad { link, force, local_point: DVec3::new(f * l.element_length, 0.0, 0.0), moment });
+        true
     }
 
     /// Replaces the state by the static equilibrium at the current time:

@@ -1333,7 +1333,7 @@ impl Chain {
                 }
             }
             let dq = scale * dx[s];
-            tw = tw + self.rows[s].s * dq;
+            tw += self.rows[s].s * dq;
             let pose = &self.poses[s];
             let w = tw.top;
             let (rj, pj) = j.frame(prev_rot, prev_pos);

@@ -116,6 +116,7 @@ pub enum RopeStart {
 
 /// How the rope's end is held.
 #[derive(Clone)]
+#[allow(clippy::large_enum_variant)] // built once per rope; boxing would only complicate the builder
 pub enum RopeEnd {
     /// Free end.
     Free,

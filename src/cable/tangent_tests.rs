@@ -23,7 +23,7 @@ fn bent_path() -> Vec<DVec3> {
     (0..=20)
         .map(|k| {
             let s = k as f64 / 20.0;
-            DVec3::new(0.4 * s.powi(2), -1.0 * s, 0.3 * (2.0 * s).sin())
+            DVec3::new(0.4 * s.powi(2), -s, 0.3 * (2.0 * s).sin())
         })
         .collect()
 }

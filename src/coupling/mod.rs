@@ -42,14 +42,36 @@
 //!   Contact impulses are those rapier computes for a free body of the
 //!   carried body's mass, one step late: good for pushes and knocks, not a
 //!   contact law (that is the contact issue's).
+//! * **Hub** (an island; [`Role::Carried`] in every cable on it): a dynamic
+//!   body that no impulse joint holds, at two or more cable attachments of
+//!   one batch, at least one of them a cable's end, and at none of the
+//!   existing cables (a payload in a two- or four-leg sling, a beam lifted
+//!   by two cranes). The cable that ends on it and whose other end is a
+//!   dynamic body (a trolley, a jointed body), if any, else the first cable
+//!   that ends on it, carries it as above; every other cable on it is built
+//!   from the hub outwards (reversed when the hub is at its end) and
+//!   grafted onto the body's link ([`RopeModel::graft`]): one chain, one
+//!   O(n) implicit solve. Their far ends are anchor springs to the world
+//!   or to a fixed or kinematic body, or free. [`classify`] says where each
+//!   cable goes ([`Placement`]), [`build_cables`] answers [`Built::Part`]
+//!   for a grafted one, and the carrying [`CoupledCable`] keeps the grafted
+//!   cables' end roles in [`CoupledCable::parts`]. Refused by name
+//!   ([`CouplingError::HubLoop`]): a cable from a hub to another hub (a
+//!   loop through two dynamic bodies) or to itself; if one cable of an
+//!   island cannot be built, none is ([`CouplingError::Island`]). A body
+//!   with a cable to a dynamic body that is no hub (a jointed body, a
+//!   payload hanging below it on that cable alone) is a hub only if that
+//!   cable ends on it (then that cable carries it); otherwise it stays
+//!   explicit (a grafted rope cannot carry a body at its far end yet).
 //! * **Base** ([`Role::Base`]): a fixed or kinematic body moves the cable
 //!   end: the start's base or the end's anchor-spring target. With a
 //!   [`BodyMotion`] given by the adapter (a scenario's prescribed motion)
 //!   the cable reads the motion exactly; otherwise it samples rapier (pose,
 //!   velocity, and the velocity change over the last step).
 //! * **Explicit** ([`Role::Explicit`]): every other dynamic body (held by
-//!   joints, on several cables). The cable end follows the body's sampled
-//!   motion; the body gets the cable's reaction as an impulse every step.
+//!   joints, only at cable starts, or added to a body an existing cable
+//!   couples explicitly). The cable end follows the body's sampled motion;
+//!   the body gets the cable's reaction as an impulse every step.
 //!   Stable roughly while `k·h²/m ≲ 1` with `k = EA/L_e` (see
 //!   [`Coupling::explicit_ratios`]).
 
@@ -57,7 +79,9 @@ mod explicit;
 
 pub(crate) use self::explicit::{follow, rail_drive, reaction, BodySample};
 use crate::cable::chain::rotation_vector;
-use crate::cable::{BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeStart};
+use crate::cable::{
+    BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeModel, RopeStart,
+};
 use crate::integrate::Scheme;
 use glam::{DMat3, DQuat, DVec3};
 use rapier3d::prelude as rp;
@@ -175,7 +199,7 @@ pub enum CouplingError {
     #[error("a free cable start needs a path (its first point is the start)")]
     FreeStartNeedsPath,
     /// The body is already carried by another cable.
-    #[error("the cable's {end} is attached to a body that cable #{cable} already carries as a link of its chain; attach all cables of a body in the same batch (then the body is coupled explicitly), slings solved in one implicit island are not built yet")]
+    #[error("the cable's {end} is attached to a body that cable #{cable} already carries as a link of its chain; attach all cables of a body in the same batch (then they are solved together as one island)")]
     BodyTaken {
         /// `start` or `end`.
         end: &'static str,
@@ -194,12 +218,40 @@ pub enum CouplingError {
         /// What kind of body.
         why: &'static str,
     },
+    /// A body solved as a hub (on several cables) would close a loop
+    /// through another dynamic body, or a cable runs from the hub to itself.
+    #[error("{}", hub_loop_message(*hub, *other))]
+    HubLoop {
+        /// The hub body (dynamic, on several cables, no joints).
+        hub: rp::RigidBodyHandle,
+        /// The dynamic body at the cable's other end (`hub` itself for a
+        /// cable from the hub to the hub).
+        other: rp::RigidBodyHandle,
+    },
+    /// Another cable of the same island could not be built.
+    #[error("this cable holds the same body as cable #{cable} of the batch and is solved with it as one island, and that cable could not be built")]
+    Island {
+        /// Index (in the batch) of the cable that failed.
+        cable: usize,
+    },
     /// The rope could not be built.
     #[error("{0}")]
     Build(#[from] RopeError),
     /// The cable could not be created or started.
     #[error("{0}")]
     Cable(Box<CableError>),
+}
+
+fn hub_loop_message(hub: rp::RigidBodyHandle, other: rp::RigidBodyHandle) -> String {
+    let name = |h: rp::RigidBodyHandle| format!("rapier body #{}", h.into_raw_parts().0);
+    if hub == other {
+        return format!("a cable runs from {} to itself; it hangs on several cables and is solved with them as one island, where a cable must end on the world, a fixed or kinematic body, or nothing", name(hub));
+    }
+    format!(
+        "{} hangs on several cables and is solved with them as one island, but the cable between it and {} (dynamic) would close a loop through two dynamic bodies, which the island solve does not handle; make one of them fixed or kinematic, hang the other on a single cable, or hold it with a joint (then it is coupled explicitly)",
+        name(hub),
+        name(other)
+    )
 }
 
 /// A body that is a link of a cable's chain.
@@ -253,6 +305,9 @@ pub struct CoupledCable {
     pub cable: Cable,
     /// Role of the body at the start and at the end (`None`: no body).
     pub roles: EndRoles,
+    /// Roles at the start and end of each further cable grafted onto the
+    /// chain at a hub (`cable.rope(k + 1)`), in that cable's own direction.
+    pub parts: Vec<EndRoles>,
     /// Bodies that are links of the chain.
     pub carried: Vec<CarriedLink>,
     /// Bodies sampled every step (bases without a closed-form motion,
@@ -267,7 +322,13 @@ pub struct CoupledCable {
 impl CoupledCable {
     /// The role of `body` in this cable, if it is attached.
     pub fn role_of(&self, body: rp::RigidBodyHandle) -> Option<Role> {
-        self.roles.iter().flatten().find(|(b, _)| *b == body).map(|(_, r)| *r)
+        self.all_roles().find(|(b, _)| *b == body).map(|(_, r)| *r)
+    }
+
+    /// The bodies at the ends of the cable's ropes (its own, then the
+    /// grafted ones) and their roles.
+    pub fn all_roles(&self) -> impl Iterator<Item = &(rp::RigidBodyHandle, Role)> {
+        std::iter::once(&self.roles).chain(&self.parts).flat_map(|r| r.iter().flatten())
     }
 
     /// Pose (origin, orientation), velocity of the centre of mass and
@@ -285,14 +346,99 @@ impl CoupledCable {
     }
 }
 
-/// Roles of the bodies at the ends of `specs`, cable by cable, given the
-/// bodies already used by `existing` cables (see the module docs).
+/// Where a cable's rope goes: the root of its own chain, or a limb grafted
+/// onto another cable's chain at a hub body (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Placement {
+    /// The cable has its own chain.
+    Own,
+    /// The cable's rope is grafted onto the chain of cable `onto` (its
+    /// index in the batch), which carries `hub` at its end.
+    Grafted {
+        /// Index in the batch of the cable that carries the hub.
+        onto: usize,
+        /// The hub body.
+        hub: rp::RigidBodyHandle,
+        /// `true`: the hub is at this cable's end (the limb runs from the
+        /// cable's end to its start); `false`: at its start.
+        reversed: bool,
+    },
+}
+
+/// How [`classify`] couples one cable of a batch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Classified {
+    /// Roles of the bodies at the cable's start and end.
+    pub roles: EndRoles,
+    /// Its own chain, or a limb of another cable's chain.
+    pub placement: Placement,
+}
+
+/// A body's attachments in a batch: (cable index, 0 at its start or 1 at
+/// its end).
+type Uses = Vec<(usize, usize)>;
+
+/// The hubs of a batch: dynamic bodies with no joints at ≥ 2 cable ends of
+/// the batch (at least one of them a cable's end) and at none of the
+/// existing cables. Per hub: the carrying cable, or why there is none. A
+/// candidate with a cable to a dynamic body that is not a candidate itself
+/// (a jointed body, a payload on that cable alone) is a hub only if that
+/// cable ends on it (then it carries it); else it stays explicit, as such
+/// a limb cannot be grafted.
+fn hubs(
+    specs: &[&CableSpec],
+    existing: &[&CoupledCable],
+    bodies: &rp::RigidBodySet,
+    joints: &rp::ImpulseJointSet,
+) -> HashMap<rp::RigidBodyHandle, Result<usize, CouplingError>> {
+    let mut uses: HashMap<rp::RigidBodyHandle, Uses> = HashMap::new();
+    for (i, s) in specs.iter().enumerate() {
+        for (k, a) in [&s.start, &s.end].into_iter().enumerate() {
+            if let Attach::Body { body, .. } = a {
+                uses.entry(*body).or_default().push((i, k));
+            }
+        }
+    }
+    let dynamic = |h: &rp::RigidBodyHandle| bodies.get(*h).is_some_and(|rb| rb.is_dynamic());
+    uses.retain(|hub, at| {
+        let used_before = existing.iter().any(|c| c.role_of(*hub).is_some());
+        at.len() >= 2 && dynamic(hub) && !used_before && joints.attached_joints(*hub).next().is_none() && at.iter().any(|(_, k)| *k == 1)
+    });
+    let mut out = HashMap::new();
+    for (&hub, at) in &uses {
+        // The other end of each cable on the hub, when it is a dynamic body.
+        let far = |&(i, k): &(usize, usize)| match if k == 0 { &specs[i].end } else { &specs[i].start } {
+            Attach::Body { body, .. } if dynamic(body) => Some((i, k, *body)),
+            _ => None,
+        };
+        let loops: Vec<(usize, usize, rp::RigidBodyHandle)> = at.iter().filter_map(far).collect();
+        let carrier = if let Some(&(_, _, other)) = loops.iter().find(|l| l.2 == hub || uses.contains_key(&l.2)) {
+            // A cable from the hub to itself, or to another hub: a loop
+            // through two dynamic bodies.
+            Err(CouplingError::HubLoop { hub, other })
+        } else {
+            match loops.as_slice() {
+                [] => Ok(at.iter().find(|(_, k)| *k == 1).expect("an end is on the hub").0),
+                // The one cable to another dynamic body (a trolley, a
+                // jointed body) carries the hub, if the hub is at its end.
+                [(i, 1, _)] => Ok(*i),
+                _ => continue,
+            }
+        };
+        out.insert(hub, carrier);
+    }
+    out
+}
+
+/// Roles of the bodies at the ends of `specs`, cable by cable, and where
+/// each cable's rope goes, given the bodies already used by `existing`
+/// cables (see the module docs).
 pub fn classify(
     specs: &[&CableSpec],
     existing: &[&CoupledCable],
     bodies: &rp::RigidBodySet,
     joints: &rp::ImpulseJointSet,
-) -> Vec<Result<EndRoles, CouplingError>> {
+) -> Vec<Result<Classified, CouplingError>> {
     let mut uses: HashMap<rp::RigidBodyHandle, usize> = HashMap::new();
     for s in specs {
         for a in [&s.start, &s.end] {
@@ -302,14 +448,17 @@ pub fn classify(
         }
     }
     for c in existing {
-        for (b, _) in c.roles.iter().flatten() {
+        for (b, _) in c.all_roles() {
             *uses.entry(*b).or_default() += 1;
         }
     }
+    let hubs = hubs(specs, existing, bodies, joints);
     specs
         .iter()
-        .map(|s| {
+        .enumerate()
+        .map(|(i, s)| {
             let mut out = [None, None];
+            let mut placement = Placement::Own;
             for (k, a) in [&s.start, &s.end].into_iter().enumerate() {
                 let Attach::Body { body, .. } = a else {
                     continue;
@@ -321,7 +470,13 @@ pub fn classify(
                 if let Some(ci) = existing.iter().position(|c| matches!(c.role_of(*body), Some(Role::Carried | Role::Trolley { .. }))) {
                     return Err(CouplingError::BodyTaken { end, cable: ci });
                 }
-                let role = if !rb.is_dynamic() {
+                let role = if let Some(carrier) = hubs.get(body) {
+                    let onto = carrier.clone()?;
+                    if onto != i {
+                        placement = Placement::Grafted { onto, hub: *body, reversed: k == 1 };
+                    }
+                    Role::Carried
+                } else if !rb.is_dynamic() {
                     Role::Base
                 } else if uses[body] != 1 {
                     Role::Explicit
@@ -353,7 +508,7 @@ pub fn classify(
                 }
                 out[k] = Some((*body, role));
             }
-            Ok(out)
+            Ok(Classified { roles: out, placement })
         })
         .collect()
 }
@@ -443,23 +598,40 @@ impl Coupling {
     }
 
     /// Builds the cables of `specs` and adds them (see [`build_cables`]);
-    /// returns, per spec, the new cable's index or why it was not built.
+    /// returns, per spec, where its rope is: (index of the cable in
+    /// [`Coupling::cables`], rope index in it, [`Cable::rope`]: 0 for a
+    /// cable's own rope, ≥ 1 for a rope grafted onto it at a hub), or why it
+    /// was not built.
     pub fn add(
         &mut self,
         specs: &[CableSpec],
         bodies: &mut rp::RigidBodySet,
         joints: &mut rp::ImpulseJointSet,
         motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
-    ) -> Vec<Result<usize, CouplingError>> {
+    ) -> Vec<Result<(usize, usize), CouplingError>> {
         let existing: Vec<&CoupledCable> = self.cables.iter().collect();
         let built = build_cables(specs, &existing, bodies, joints, motions);
-        built
-            .into_iter()
-            .map(|r| {
-                self.cables.push(r?);
-                Ok(self.cables.len() - 1)
-            })
-            .collect()
+        let mut index = vec![None; specs.len()];
+        let mut out: Vec<Result<(usize, usize), CouplingError>> = Vec::with_capacity(specs.len());
+        let mut parts = Vec::new();
+        for (i, r) in built.into_iter().enumerate() {
+            out.push(match r {
+                Ok(Built::Cable(cc)) => {
+                    self.cables.push(*cc);
+                    index[i] = Some(self.cables.len() - 1);
+                    Ok((self.cables.len() - 1, 0))
+                }
+                Ok(Built::Part { onto, part }) => {
+                    parts.push((i, onto, part));
+                    Ok((usize::MAX, part))
+                }
+                Err(e) => Err(e),
+            });
+        }
+        for (i, onto, part) in parts {
+            out[i] = Ok((index[onto].expect("a part's carrying cable is built"), part));
+        }
+        out
     }
 
     /// Phase 1 over every cable: [`step_cables`].
@@ -534,7 +706,6 @@ impl CoupledCable {
             .map(|f| (f.body, f.start, k * h * h / bodies.get(f.body).map_or(f64::INFINITY, |rb| rb.mass() as f64)))
             .collect()
     }
-
 }
 
 /// Switches off on a carried rapier body what the cable solve does for it:
@@ -564,32 +735,84 @@ fn mute_motor(joints: &mut rp::ImpulseJointSet, joint: rp::ImpulseJointHandle) {
     }
 }
 
-/// Builds one cable from its spec and the roles of its end bodies.
-fn build(
-    spec: &CableSpec,
-    roles: EndRoles,
+/// The motion of a base body's point `anchor` (body frame): closed form
+/// from `motions`, fixed, or sampled from rapier every step (a new
+/// [`Follower`]).
+fn base_motion(
+    body: rp::RigidBodyHandle,
+    anchor: DVec3,
+    start: bool,
+    rb: &rp::RigidBody,
+    motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
+    followers: &mut Vec<Follower>,
+) -> BaseMotion {
+    if let Some(m) = motions.get(&body) {
+        if rb.is_fixed() {
+            return BaseMotion::Fixed(at_anchor(m(0.0), anchor));
+        }
+        let m = m.clone();
+        return BaseMotion::Prescribed(Arc::new(move |t| at_anchor(m(t), anchor)));
+    }
+    if rb.is_fixed() {
+        let (p, r) = pose_of(rb);
+        return BaseMotion::Fixed(BaseState::fixed(r, p + r * anchor));
+    }
+    let shared = Arc::new(Mutex::new(sample_body(rb, anchor)));
+    followers.push(Follower { body, anchor, start, dynamic: rb.is_dynamic(), sample: shared.clone(), sampled: None, reaction: (DVec3::ZERO, DVec3::ZERO) });
+    follow(shared)
+}
+
+/// A rope end held by an anchor spring to a world point or to a body that
+/// rapier keeps (base or explicit); returns the end and the point it is
+/// held at now.
+fn held_far_end(
+    attach: Attach,
     bodies: &rp::RigidBodySet,
     motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
-) -> Result<CoupledCable, CouplingError> {
+    followers: &mut Vec<Follower>,
+) -> Result<(RopeEnd, Option<DVec3>), CouplingError> {
+    Ok(match attach {
+        Attach::Free => (RopeEnd::Free, None),
+        Attach::World { point, clamp } => {
+            let t: Target = Arc::new(move |_| (point, DVec3::ZERO));
+            (held_end(t, clamp), Some(point))
+        }
+        Attach::Body { body, anchor, clamp } => {
+            let rb = &bodies[body];
+            let (p, r) = pose_of(rb);
+            let moving = !rb.is_fixed()
+                && !motions.get(&body).is_some_and(|m| {
+                    let (a, b) = (m(0.0), m(1.0));
+                    a.rotation == b.rotation && a.angular_velocity == DVec3::ZERO
+                });
+            if clamp && rb.is_dynamic() {
+                return Err(CouplingError::ClampedMovingEnd { why: "a dynamic body rapier keeps" });
+            }
+            if clamp && moving && !rb.is_dynamic() {
+                return Err(CouplingError::ClampedMovingEnd { why: "a kinematic body that may turn" });
+            }
+            let t = target_of(base_motion(body, anchor, false, rb, motions, followers));
+            (held_end(t, clamp), Some(p + r * anchor))
+        }
+    })
+}
+
+/// A cable's chain before its grafts and integrator: the rope model, the
+/// bodies it carries (body, 0 start / 1 end, place; `usize::MAX` link: the
+/// end body), the followers, and the end body's initial pose (origin,
+/// orientation) in the chain.
+struct Draft {
+    model: RopeModel,
+    carried: Vec<(rp::RigidBodyHandle, usize, BodyInChain)>,
+    followers: Vec<Follower>,
+    end_pose: Option<(DVec3, DMat3)>,
+}
+
+/// Builds one cable's own chain from its spec and the roles of its end
+/// bodies.
+fn draft(spec: &CableSpec, roles: EndRoles, bodies: &rp::RigidBodySet, motions: &HashMap<rp::RigidBodyHandle, BodyMotion>) -> Result<Draft, CouplingError> {
     let mut followers = Vec::new();
     let mut carried = Vec::new();
-    // The motion of a base body's point: closed form, or a sampled follower.
-    let mut base_motion = |body: rp::RigidBodyHandle, anchor: DVec3, start: bool, rb: &rp::RigidBody| -> BaseMotion {
-        if let Some(m) = motions.get(&body) {
-            if rb.is_fixed() {
-                return BaseMotion::Fixed(at_anchor(m(0.0), anchor));
-            }
-            let m = m.clone();
-            return BaseMotion::Prescribed(Arc::new(move |t| at_anchor(m(t), anchor)));
-        }
-        if rb.is_fixed() {
-            let (p, r) = pose_of(rb);
-            return BaseMotion::Fixed(BaseState::fixed(r, p + r * anchor));
-        }
-        let shared = Arc::new(Mutex::new(sample_body(rb, anchor)));
-        followers.push(Follower { body, anchor, start, dynamic: rb.is_dynamic(), sample: shared.clone(), sampled: None, reaction: (DVec3::ZERO, DVec3::ZERO) });
-        follow(shared)
-    };
     let mut rope = spec.rope.clone();
     let start_point;
     rope = match (spec.start, roles[0]) {
@@ -611,51 +834,79 @@ fn build(
                 carried.push((body, 0, BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
                 rope.start(RopeStart::SlidingBody { body: spec.exact[0].unwrap_or_else(|| lumped_of(rb)), axis, anchor, clamp })
             } else {
-                let b = base_motion(body, anchor, true, rb);
+                let b = base_motion(body, anchor, true, rb, motions, &mut followers);
                 rope.start(held_start(b, clamp))
             }
         }
         (Attach::Body { .. }, None) => unreachable!("classify gives every body end a role"),
     };
-    let mut end_point = None;
+    let end_point;
+    let mut end_body = None;
     rope = match (spec.end, roles[1]) {
-        (Attach::Free, _) => rope.end(RopeEnd::Free),
-        (Attach::World { point, clamp }, _) => {
-            end_point = Some(point);
-            let t: Target = Arc::new(move |_| (point, DVec3::ZERO));
-            rope.end(held_end(t, clamp))
-        }
-        (Attach::Body { body, anchor, clamp }, Some((_, role))) => {
+        (Attach::Body { body, anchor, clamp }, Some((_, Role::Carried))) => {
             let rb = &bodies[body];
             let (p, r) = pose_of(rb);
             end_point = Some(p + r * anchor);
-            if role == Role::Carried {
-                carried.push((body, 1, BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
-                rope.end(RopeEnd::Body { body: spec.exact[1].unwrap_or_else(|| lumped_of(rb)), anchor, clamp })
-            } else {
-                let moving = !rb.is_fixed()
-                    && !motions.get(&body).is_some_and(|m| {
-                        let (a, b) = (m(0.0), m(1.0));
-                        a.rotation == b.rotation && a.angular_velocity == DVec3::ZERO
-                    });
-                if clamp && rb.is_dynamic() {
-                    return Err(CouplingError::ClampedMovingEnd { why: "a dynamic body rapier keeps" });
-                }
-                if clamp && moving && !rb.is_dynamic() {
-                    return Err(CouplingError::ClampedMovingEnd { why: "a kinematic body that may turn" });
-                }
-                let t = target_of(base_motion(body, anchor, false, rb));
-                rope.end(held_end(t, clamp))
-            }
+            carried.push((body, 1, BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
+            let lumped = spec.exact[1].unwrap_or_else(|| lumped_of(rb));
+            end_body = Some((lumped.rotation, anchor));
+            rope.end(RopeEnd::Body { body: lumped, anchor, clamp })
         }
-        (Attach::Body { .. }, None) => unreachable!("classify gives every body end a role"),
+        (end, _) => {
+            let (e, point) = held_far_end(end, bodies, motions, &mut followers)?;
+            end_point = point;
+            rope.end(e)
+        }
     };
     let path = match (&spec.path, end_point) {
         (Some(p), _) => p.clone(),
         (None, Some(e)) => vec![start_point, e],
         (None, None) => vec![start_point, start_point - DVec3::Y * spec.rope.length()],
     };
+    // The end body sits where the path ends (its origin −R·anchor from there).
+    let tip = *path.last().expect("a rope path has points");
+    let end_pose = end_body.map(|(r, anchor): (DMat3, DVec3)| (tip - r * anchor, r));
     let model = rope.path(path).build()?;
+    Ok(Draft { model, carried, followers, end_pose })
+}
+
+/// Grafts a cable's rope onto the chain of `draft`, whose end body is the
+/// hub the cable is attached to (at its end when `reversed`, else at its
+/// start). The limb starts at the hub and ends at the cable's other
+/// attachment (an anchor spring, or free).
+fn graft(
+    draft: &mut Draft,
+    spec: &CableSpec,
+    reversed: bool,
+    bodies: &rp::RigidBodySet,
+    motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
+) -> Result<(), CouplingError> {
+    let (near, far) = if reversed { (spec.end, spec.start) } else { (spec.start, spec.end) };
+    let Attach::Body { anchor, clamp, .. } = near else {
+        unreachable!("a grafted cable is attached to its hub");
+    };
+    let (origin, r) = draft.end_pose.expect("the carrying cable ends on the hub");
+    let at = origin + r * anchor;
+    let (end, far_point) = held_far_end(far, bodies, motions, &mut draft.followers)?;
+    let path = match &spec.path {
+        Some(p) if reversed => p.iter().rev().copied().collect(),
+        Some(p) => p.clone(),
+        None => match far_point {
+            Some(e) => vec![at, e],
+            None if reversed => return Err(CouplingError::FreeStartNeedsPath),
+            None => vec![at, at - DVec3::Y * spec.rope.length()],
+        },
+    };
+    let limb = spec.rope.clone().start(held_start(BaseMotion::Fixed(BaseState::fixed(r, at)), clamp)).end(end).path(path).build()?;
+    let place = draft.model.layout.end_body.expect("the carrying cable ends on the hub");
+    draft.model.graft(limb, &place, reversed)?;
+    Ok(())
+}
+
+/// Finishes a drafted chain: the carried bodies' links and the cable with
+/// its integrator.
+fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft, bodies: &rp::RigidBodySet) -> Result<CoupledCable, CouplingError> {
+    let Draft { model, carried, followers, .. } = draft;
     let carried = carried
         .into_iter()
         .map(|(body, k, mut place)| {
@@ -680,7 +931,7 @@ fn build(
         .collect();
     let cable = Cable::new(model, spec.scheme.clone()).map_err(|e| CouplingError::Cable(Box::new(e)))?;
     let fixed_loads = cable.model.chain.loads.len();
-    Ok(CoupledCable { cable, roles, carried, followers, fixed_loads, failed: false })
+    Ok(CoupledCable { cable, roles, parts, carried, followers, fixed_loads, failed: false })
 }
 
 /// Phase 1 of a step of length `h`, before rapier steps: samples the
@@ -836,34 +1087,96 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
     }
 }
 
+/// What [`build_cables`] made of one spec.
+#[derive(Debug)]
+pub enum Built {
+    /// A cable with its own chain (and the ropes grafted onto it).
+    Cable(Box<CoupledCable>),
+    /// The spec's rope is rope `part` (≥ 1, see [`Cable::rope`]) of the
+    /// chain built for spec `onto` of the same batch.
+    Part {
+        /// Index in the batch of the spec whose cable holds this rope.
+        onto: usize,
+        /// The rope's index in that cable ([`Cable::rope`]).
+        part: usize,
+    },
+}
+
 /// Builds the cables of `specs`, classified together and with the bodies
-/// `existing` cables use ([`classify`]); returns, per spec, the cable or why
-/// it was not built. `motions` gives closed-form motions of fixed or
-/// kinematic bodies (others are sampled). Carried bodies get the rapier
-/// settings the module docs describe and a trolley's rail motor is switched
-/// off in rapier; initial velocities are not given to the chains yet
-/// ([`CoupledCable::start_velocities`]).
+/// `existing` cables use ([`classify`]); returns, per spec, what was built
+/// or why not. A cable on a hub is grafted onto the cable that carries the
+/// hub ([`Built::Part`]); if one cable of such an island fails, all fail
+/// (the others with [`CouplingError::Island`]). `motions` gives closed-form
+/// motions of fixed or kinematic bodies (others are sampled). Carried
+/// bodies get the rapier settings the module docs describe and a trolley's
+/// rail motor is switched off in rapier; initial velocities are not given
+/// to the chains yet ([`CoupledCable::start_velocities`]).
 pub fn build_cables(
     specs: &[CableSpec],
     existing: &[&CoupledCable],
     bodies: &mut rp::RigidBodySet,
     joints: &mut rp::ImpulseJointSet,
     motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
-) -> Vec<Result<CoupledCable, CouplingError>> {
+) -> Vec<Result<Built, CouplingError>> {
     let refs: Vec<&CableSpec> = specs.iter().collect();
-    let roles = classify(&refs, existing, bodies, joints);
-    specs
-        .iter()
-        .zip(roles)
-        .map(|(spec, roles)| {
-            let cc = build(spec, roles?, bodies, motions)?;
+    let classes = classify(&refs, existing, bodies, joints);
+    let n = specs.len();
+    // Own chains first, then the grafts in batch order.
+    let mut drafts: Vec<Option<Result<Draft, CouplingError>>> = (0..n)
+        .map(|i| match &classes[i] {
+            Ok(c) if c.placement == Placement::Own => Some(draft(&specs[i], c.roles, bodies, motions)),
+            _ => None,
+        })
+        .collect();
+    let mut out: Vec<Option<Result<Built, CouplingError>>> = (0..n).map(|_| None).collect();
+    let mut parts: Vec<Vec<EndRoles>> = vec![Vec::new(); n];
+    for i in 0..n {
+        match &classes[i] {
+            Err(e) => out[i] = Some(Err(e.clone())),
+            Ok(Classified { roles, placement: Placement::Grafted { onto, reversed, .. } }) => {
+                let onto = *onto;
+                let r = match &mut drafts[onto] {
+                    Some(Ok(d)) => graft(d, &specs[i], *reversed, bodies, motions),
+                    _ => Err(CouplingError::Island { cable: onto }),
+                };
+                out[i] = Some(match r {
+                    Ok(()) => {
+                        parts[onto].push(*roles);
+                        Ok(Built::Part { onto, part: parts[onto].len() })
+                    }
+                    Err(e) => {
+                        // The island is not built without this rope.
+                        if matches!(drafts[onto], Some(Ok(_))) {
+                            drafts[onto] = Some(Err(CouplingError::Island { cable: i }));
+                        }
+                        Err(e)
+                    }
+                });
+            }
+            Ok(_) => {}
+        }
+    }
+    for i in 0..n {
+        let Some(d) = drafts[i].take() else { continue };
+        let roles = classes[i].as_ref().expect("drafted").roles;
+        let r = d.and_then(|d| finish(&specs[i], roles, std::mem::take(&mut parts[i]), d, bodies)).map(|cc| {
             for c in &cc.carried {
                 hand_to_cable(&mut bodies[c.body]);
             }
             if let Some((_, Role::Trolley { joint, .. })) = cc.roles[0] {
                 mute_motor(joints, joint);
             }
-            Ok(cc)
-        })
-        .collect()
+            Built::Cable(Box::new(cc))
+        });
+        out[i] = Some(r);
+    }
+    // An island whose carrying cable failed: its grafted ropes fail too.
+    for i in 0..n {
+        if let Ok(Classified { placement: Placement::Grafted { onto, .. }, .. }) = &classes[i] {
+            if matches!(out[*onto], Some(Err(_))) && matches!(out[i], Some(Ok(_))) {
+                out[i] = Some(Err(CouplingError::Island { cable: *onto }));
+            }
+        }
+    }
+    out.into_iter().map(|r| r.expect("every spec is decided")).collect()
 }

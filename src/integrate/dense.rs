@@ -219,14 +219,14 @@ impl SecondOrderSystem for DenseSystem {
         }
         self.load(t);
         let n = self.n;
-        for i in 0..n {
+        for (i, ri) in r.iter_mut().enumerate().take(n) {
             let row = i * n..(i + 1) * n;
             let (m, c, k) = (&self.mass[row.clone()], &self.damping[row.clone()], &self.stiffness[row]);
             let mut s = -self.f_buf[i];
             for j in 0..n {
                 s += m[j] * a[j] + c[j] * v[j] + k[j] * q[j];
             }
-            r[i] = s;
+            *ri = s;
         }
         Ok(())
     }

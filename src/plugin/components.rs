@@ -119,6 +119,20 @@ impl std::ops::DerefMut for CableSim {
     }
 }
 
+/// Put by the plugin on a cable entity whose rope is solved as a limb of
+/// another cable entity's chain: a cable on a body that hangs on several
+/// cables (a sling leg), grafted onto the cable that carries the body. That
+/// entity has the [`CableSim`]; this one has its own [`CableState`] and no
+/// `CableSim`.
+#[derive(Component, Debug, Clone, Copy, PartialEq, Eq, Reflect)]
+#[reflect(Component, Debug, PartialEq)]
+pub struct CableRopeOf {
+    /// The cable entity whose chain solves this rope.
+    pub cable: Entity,
+    /// The rope's index in that chain ([`Cable::rope`](crate::cable::Cable::rope), ≥ 1).
+    pub rope: usize,
+}
+
 /// What other systems read about a cable (f32, world frame), refreshed
 /// every fixed step after rapier's writeback.
 #[derive(Component, Debug, Clone, Default, Reflect)]
@@ -130,7 +144,8 @@ pub struct CableState {
     pub tensions: Vec<f32>,
     /// Stretched length, m.
     pub stretched_length: f32,
-    /// Kinetic + gravitational + elastic energy, J.
+    /// Kinetic + gravitational + elastic energy of the cable's chain, J (for
+    /// a [`CableRopeOf`] rope: of the whole chain it is solved in).
     pub energy: f64,
     /// Simulation time of the cable, s.
     pub time: f64,

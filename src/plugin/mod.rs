@@ -50,17 +50,30 @@
 //!   acceleration with the loads and motors then acting.
 //! * A **fixed or kinematic body** moves the cable end (the cable's base
 //!   follows its pose, velocity and the velocity change over the last step).
+//! * A **dynamic body that hangs on several cables** and that no joint
+//!   holds (a payload in a two- or four-leg sling, a beam lifted by two
+//!   cranes) is a hub: the first cable that ends on it carries it as above,
+//!   and the others are solved in the same implicit chain as limbs grafted
+//!   onto the body, their far ends held by the implicit anchor springs (the
+//!   world, a fixed or kinematic body, or free). Such a cable entity gets
+//!   [`CableRopeOf`] (the carrying entity and its rope index) and its own
+//!   [`CableState`] instead of a [`CableSim`]. A cable between two hubs (a
+//!   loop through two dynamic bodies) is refused with a [`CableDiverged`]
+//!   message naming both, and so are the other cables of that island. A
+//!   body whose cable leads to a dynamic body that is no hub is a hub only
+//!   if that cable ends on it; otherwise it is coupled explicitly. The
+//!   cables of a hub must be spawned in the same step.
 //! * Any **other dynamic body** (one rapier keeps: joint graphs, a body on
-//!   several cables) gets the end force as an impulse each step (explicit
-//!   exchange; stable while `k·h²/m` stays below ~1, with `k = EA/L_e`).
-//!   Cables spawned in the same step are classified together: a body at the
-//!   ends of two of them is coupled explicitly to both. A cable spawned
-//!   later on a body another cable already carries is refused.
+//!   several cables' starts only) gets the end force as an impulse each step
+//!   (explicit exchange; stable while `k·h²/m` stays below ~1, with `k =
+//!   EA/L_e`). Cables spawned in the same step are classified together. A
+//!   cable spawned later on a body another cable already carries is
+//!   refused.
 
 mod components;
 mod systems;
 
-pub use self::components::{CableAnchor, CableDescriptor, CableDiverged, CableSim, CableState, CarriedBody};
+pub use self::components::{CableAnchor, CableDescriptor, CableDiverged, CableRopeOf, CableSim, CableState, CarriedBody};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::PhysicsSet;
 
@@ -105,7 +118,7 @@ pub struct CableSettings {
 impl Plugin for CablePlugin {
     fn build(&self, app: &mut App) {
         app.insert_resource(CableSettings { substeps: self.substeps.max(1) });
-        app.register_type::<CableState>();
+        app.register_type::<CableState>().register_type::<CableRopeOf>();
         app.add_message::<CableDiverged>();
         app.configure_sets(
             FixedUpdate,

@@ -2,15 +2,18 @@
 //! thin adapters that map entities to rapier handles and call the coupling
 //! core ([`crate::coupling`]).
 
-use super::components::{CableAnchor, CableDescriptor, CableDiverged, CableSim, CableState, CarriedBody};
+use super::components::{CableAnchor, CableDescriptor, CableDiverged, CableRopeOf, CableSim, CableState, CarriedBody};
 use super::CableSettings;
 use crate::cable::RopeBuilder;
-use crate::coupling::{self, rail_drive, Attach, BodyInputs, CableSpec, CoupledCable, Role};
+use crate::coupling::{self, rail_drive, Attach, BodyInputs, Built, CableSpec, CoupledCable, CouplingError, Role};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier3d::rapier::dynamics::{JointMotor, RigidBodyHandle};
 use glam::DVec3;
 use std::collections::HashMap;
+
+/// Cable entities the plugin has not built yet.
+type NotBuilt = (Without<CableSim>, Without<CableRopeOf>);
 
 /// Builds cables from new [`CableDescriptor`]s, all new ones of a step
 /// together (so a body at the ends of two new cables is coupled explicitly
@@ -18,7 +21,7 @@ use std::collections::HashMap;
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn init_cables(
     mut commands: Commands,
-    new: Query<(Entity, &CableDescriptor), Without<CableSim>>,
+    new: Query<(Entity, &CableDescriptor), NotBuilt>,
     existing: Query<&CableSim>,
     mut ctx: WriteRapierContext,
     handles: Query<&RapierRigidBodyHandle>,
@@ -67,15 +70,38 @@ pub(crate) fn init_cables(
     let others: Vec<&CoupledCable> = existing.iter().map(|s| &s.coupled).collect();
     let built = coupling::build_cables(&specs, &others, &mut ctx.rigidbody_set.bodies, &mut ctx.joints.impulse_joints, &HashMap::new());
     let bodies = &ctx.rigidbody_set.bodies;
-    for ((entity, ends), r) in owners.into_iter().zip(built) {
+    // Entities of the bodies and cables of the batch, for messages.
+    let entity_of: HashMap<RigidBodyHandle, Entity> = owners.iter().flat_map(|(_, ends)| ends.iter().flatten().map(|(e, h)| (*h, *e))).collect();
+    let batch: Vec<Entity> = owners.iter().map(|(e, _)| *e).collect();
+    let message = |e: &CouplingError| {
+        match e {
+        CouplingError::HubLoop { hub, other } if hub == other => {
+            format!("the cable runs from body {} to itself; that body hangs on several cables and is solved with them as one island, where a cable's other end must be the world, a fixed or kinematic body, or free", entity_of[hub])
+        }
+        CouplingError::HubLoop { hub, other } => format!(
+            "body {} hangs on several cables and is solved with them as one island, but the cable from it to dynamic body {} would close a loop through two dynamic bodies, which the island solve does not handle; make one of them fixed or kinematic, hang the other on a single cable, or hold it with a joint (then it is coupled explicitly)",
+            entity_of[hub], entity_of[other]
+        ),
+        CouplingError::Island { cable } => format!("the cable is solved as one island with cable {} (they hold the same body), which could not be built", batch[*cable]),
+        e => e.to_string(),
+    }
+    };
+    let mut sims: Vec<Option<CableSim>> = Vec::new();
+    let mut ropes = Vec::new();
+    for ((entity, ends), r) in owners.iter().copied().zip(built) {
+        sims.push(None);
         let mut fail = |message: String| {
             diverged.write(CableDiverged { entity, time: 0.0, message });
             commands.entity(entity).remove::<CableDescriptor>();
         };
         let mut cc = match r {
-            Ok(cc) => cc,
+            Ok(Built::Cable(cc)) => *cc,
+            Ok(Built::Part { onto, part }) => {
+                ropes.push((entity, onto, part));
+                continue;
+            }
             Err(e) => {
-                fail(e.to_string());
+                fail(message(&e));
                 continue;
             }
         };
@@ -105,7 +131,24 @@ pub(crate) fn init_cables(
                 },
             ));
         }
-        commands.entity(entity).insert((CableSim { coupled: cc, bodies: carried, rail }, CableState::default()));
+        let last = sims.len() - 1;
+        sims[last] = Some(CableSim { coupled: cc, bodies: carried, rail });
+    }
+    // A rope grafted onto another entity's chain: that entity must exist
+    // (it fails with its ropes: initial velocities).
+    for (entity, onto, part) in ropes {
+        if sims[onto].is_none() {
+            let message = format!("the cable is solved as one island with cable {} (they hold the same body), which could not be built", batch[onto]);
+            diverged.write(CableDiverged { entity, time: 0.0, message });
+            commands.entity(entity).remove::<CableDescriptor>();
+            continue;
+        }
+        commands.entity(entity).insert((CableRopeOf { cable: batch[onto], rope: part }, CableState::default()));
+    }
+    for (entity, sim) in batch.into_iter().zip(sims) {
+        if let Some(sim) = sim {
+            commands.entity(entity).insert((sim, CableState::default()));
+        }
     }
 }
 
@@ -143,6 +186,7 @@ pub(crate) fn step_cables(
     inputs: Query<InputComponents>,
     handles: Query<&RapierRigidBodyHandle>,
     joints: Query<&ImpulseJoint>,
+    ropes: Query<(Entity, &CableRopeOf)>,
     settings: Res<CableSettings>,
     time: Res<Time>,
     mut diverged: MessageWriter<CableDiverged>,
@@ -187,7 +231,12 @@ pub(crate) fn step_cables(
         given.get(&h).copied().unwrap_or_default()
     });
     for (i, t, e) in failures {
-        diverged.write(CableDiverged { entity: list[i].0, time: t, message: e.to_string() });
+        let owner = list[i].0;
+        diverged.write(CableDiverged { entity: owner, time: t, message: e.to_string() });
+        // The ropes solved in the same chain stop with it.
+        for (entity, _) in ropes.iter().filter(|(_, of)| of.cable == owner) {
+            diverged.write(CableDiverged { entity, time: t, message: format!("solved as one island with cable {owner}, which failed: {e}") });
+        }
     }
 }
 
@@ -204,15 +253,26 @@ pub(crate) fn write_bodies(mut cables: Query<(Entity, &mut CableSim)>, mut ctx: 
     coupling::after_rapier(&mut refs, &mut ctx.rigidbody_set.bodies, &ctx.simulation.narrow_phase);
 }
 
-/// Refreshes [`CableState`].
-pub(crate) fn readout(mut cables: Query<(&CableSim, &mut CableState)>) {
-    for (sim, mut st) in &mut cables {
-        let c = &sim.cable;
-        st.nodes = c.nodes().iter().map(|p| p.as_vec3()).collect();
-        st.tensions = (0..c.elements()).map(|i| c.element_forces(i).tension as f32).collect();
-        st.stretched_length = c.stretched_length() as f32;
+/// Refreshes [`CableState`] of every cable, and of the ropes grafted onto
+/// another cable's chain ([`CableRopeOf`]).
+pub(crate) fn readout(mut cables: Query<(&CableSim, &mut CableState)>, mut ropes: Query<(&CableRopeOf, &mut CableState), Without<CableSim>>) {
+    let fill = |c: &crate::cable::Cable, rope: usize, st: &mut CableState| {
+        let Some(r) = c.rope(rope) else {
+            return;
+        };
+        st.nodes = r.nodes().iter().map(|p| p.as_vec3()).collect();
+        st.tensions = (0..r.elements()).map(|i| r.element_forces(i).tension as f32).collect();
+        st.stretched_length = r.stretched_length() as f32;
         st.energy = c.energy();
         st.time = c.time();
         st.newton_iterations = c.last_stats.newton_iterations;
+    };
+    for (sim, mut st) in &mut cables {
+        fill(&sim.cable, 0, &mut st);
+    }
+    for (of, mut st) in &mut ropes {
+        if let Ok((sim, _)) = cables.get(of.cable) {
+            fill(&sim.cable, of.rope, &mut st);
+        }
     }
 }

@@ -14,8 +14,18 @@
 //!   chain too, behind a prismatic sub-joint; a `drive` on that joint acts
 //!   on it (a force table, or a velocity motor: an implicit damper
 //!   `c (v_target − v)` with `c = m/(2 dt)`, saturating at `max_force`).
-//!   Absorbed bodies are **not** rapier bodies (no collider: rapier bodies
-//!   do not touch them), and their rails are not rapier joints.
+//!   Absorbed bodies stay rapier bodies (the coupling core puts them on the
+//!   chain's pose every sub-step; see [`crate::coupling`]); their rails'
+//!   drives act in the chain, not in rapier.
+//! * **Hubs (slings).** A `dynamic` body in no joint at the ends of two or
+//!   more cables (or the end of one and the starts of others) is absorbed
+//!   by the first cable that ends on it, and the other cables are limbs of
+//!   that cable's chain, grafted onto the body, their far ends anchor
+//!   springs (world, `fixed`, `kinematic`) or free: one implicit island
+//!   ([`crate::coupling`], "Hub"). [`World::rope`] gives each cable's rope
+//!   in its own direction; probes use it. A cable from a hub to another
+//!   `dynamic` body that would close a loop through two dynamic bodies is
+//!   refused, naming both.
 //! * **Rapier bodies.** Every other body is a rapier3d body in a plain
 //!   [`rapier3d::prelude::PhysicsWorld`] (no Bevy): dynamic, fixed or
 //!   kinematic-position-based, with its one collider (ball, cuboid, capsule
@@ -111,7 +121,7 @@
 //! yet (contact is a later issue).
 
 use super::rapier::RapierWorld;
-use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection};
+use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
 use crate::coupling::{rail_drive, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
 use crate::integrate::{Scheme, SchemeParams, Substeps};
 use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, JointKind, Location, ProbeTarget, Quantity, Scenario, Shape};
@@ -242,11 +252,21 @@ fn fmt_point(p: DVec3) -> String {
 /// Names of one cable of the core and of the scenario bodies it carries.
 #[derive(Debug)]
 struct CableNames {
-    name: String,
+    /// The scenario cables whose ropes this core cable solves: its own
+    /// (rope 0), then those grafted onto it at a hub ([`Cable::rope`]).
+    ropes: Vec<String>,
     /// Scenario body name → its place in the chain.
     bodies: Vec<(String, BodyInChain)>,
     /// Prismatic joint of an absorbed trolley (joint name, drive).
     slide: Option<(String, Option<Drive>)>,
+}
+
+impl CableNames {
+    /// The cable's name in messages (shown in backticks): its name, or the
+    /// names of an island's cables joined by `` ` + ` ``.
+    fn label(&self) -> String {
+        self.ropes.join("` + `")
+    }
 }
 
 /// The cables, rapier bodies and joints of a scenario, stepped together
@@ -377,30 +397,59 @@ impl World {
         let mut core = Coupling::new();
         let built = core.add(&specs, &mut rapier.pw.bodies, &mut rapier.pw.impulse_joints, &motions);
         let name_of = |rapier: &RapierWorld, h| rapier.bodies.iter().find(|b| b.handle == h).map_or("?".to_string(), |b| b.name.clone());
-        let mut names = Vec::new();
-        for (c, r) in scenario.cables.iter().zip(built) {
-            let i = r.map_err(|e| match e {
+        // The first error that is not only a consequence of another (an island member's).
+        let first_error = built.iter().position(|r| matches!(r, Err(e) if !matches!(e, CouplingError::Island { .. }))).or_else(|| built.iter().position(|r| r.is_err()));
+        if let Some(k) = first_error {
+            let c = &scenario.cables[k];
+            let Err(e) = &built[k] else { unreachable!("an error") };
+            return Err(match e.clone() {
                 CouplingError::Build(source) => SimError::Build { file: file.clone(), location: c.location, cable: c.name.clone(), source },
                 CouplingError::ClampedMovingEnd { why } => {
-                    let body = match &c.end {
-                        CableEnd::Body { body, .. } => body.as_str(),
+                    let body = match (&c.start, &c.end) {
+                        (_, CableEnd::Body { body, clamp: true, .. }) | (CableEnd::Body { body, clamp: true, .. }, _) => body.as_str(),
                         _ => "?",
                     };
                     unsupported(c.location, if why.starts_with("a dynamic") {
-                        format!("cable `{}` with its `end` clamped to body `{body}`, which rapier keeps (a dynamic body held by joints or other cables: the end spring's orientation hold has a fixed target; clamp the `start` instead, or leave the end pinned)", c.name)
+                        format!("cable `{}` with an end clamped to body `{body}`, which rapier keeps (a dynamic body held by joints or other cables: the end spring's orientation hold has a fixed target; clamp the `start` instead, or leave the end pinned)", c.name)
                     } else {
-                        format!("cable `{}` with its `end` clamped to spinning body `{body}` (clamp the `start` instead)", c.name)
+                        format!("cable `{}` with an end clamped to spinning body `{body}` (clamp the `start` instead)", c.name)
                     })
                 }
+                CouplingError::HubLoop { hub, other } => {
+                    let (hub, other) = (name_of(&rapier, hub), name_of(&rapier, other));
+                    let message = if hub == other {
+                        format!("cable `{}` runs from body `{hub}` to itself (`{hub}` hangs on several cables and is solved with them as one island, where a cable's other end must be the world, a fixed or kinematic body, or free)", c.name)
+                    } else {
+                        format!("cable `{}`: body `{hub}` hangs on several cables and is solved with them as one island, but a cable from it to dynamic body `{other}` would close a loop through two dynamic bodies, which the island solve does not handle; make one of them fixed or kinematic, hang `{other}` on a single cable, or hold it with a joint (then it is coupled explicitly)", c.name)
+                    };
+                    SimError::Invalid { file: file.clone(), location: c.location, message }
+                }
+                CouplingError::Island { cable } => SimError::Invalid {
+                    file: file.clone(),
+                    location: c.location,
+                    message: format!("cable `{}`: solved as one island with cable `{}`, which could not be built", c.name, scenario.cables[cable].name),
+                },
                 e => SimError::Invalid { file: file.clone(), location: c.location, message: format!("cable `{}`: {e}", c.name) },
-            })?;
+            });
+        }
+        let places: Vec<(usize, usize)> = built.into_iter().map(|r| r.expect("errors are returned above")).collect();
+        let mut names: Vec<CableNames> = core.cables.iter().map(|_| CableNames { ropes: Vec::new(), bodies: Vec::new(), slide: None }).collect();
+        for (c, &(i, part)) in scenario.cables.iter().zip(&places) {
+            let n = &mut names[i];
+            if n.ropes.len() <= part {
+                n.ropes.resize(part + 1, String::new());
+            }
+            n.ropes[part] = c.name.clone();
             let cc = &mut core.cables[i];
             for l in &c.loads {
-                cc.cable.add_point_load_and_moment(l.s, l.force, l.moment);
+                let added = cc.cable.add_rope_point_load(part, l.s, l.force, l.moment);
+                debug_assert!(added, "the core gave this rope");
             }
+        }
+        for (cc, n) in core.cables.iter_mut().zip(&mut names) {
             cc.keep_loads();
-            let bodies = cc.carried.iter().map(|cb| (name_of(&rapier, cb.body), cb.place)).collect();
-            let slide = match cc.roles[0] {
+            n.bodies = cc.carried.iter().map(|cb| (name_of(&rapier, cb.body), cb.place)).collect();
+            n.slide = match cc.roles[0] {
                 Some((_, Role::Trolley { joint, .. })) => {
                     let k = rapier.joints.iter().position(|j| j.handle == joint).expect("the rail is a scenario joint");
                     // The cable drives the rail; rapier keeps it as a joint only.
@@ -414,7 +463,6 @@ impl World {
                     rb.carried = true;
                 }
             }
-            names.push(CableNames { name: c.name.clone(), bodies, slide });
         }
         for p in &scenario.probes {
             let ProbeTarget::Joint(name) = &p.target else { continue };
@@ -432,11 +480,12 @@ impl World {
         if sim.statics {
             // Start from the static equilibrium (gravity, loads, held ends).
             let steps = sim.static_load_steps as usize;
-            for ((sc_cable, cc), n) in scenario.cables.iter().zip(&mut core.cables).zip(&names) {
+            for (cc, n) in core.cables.iter_mut().zip(&names) {
+                let location = scenario.cables.iter().find(|c| c.name == n.ropes[0]).expect("a scenario cable").location;
                 cc.cable.solve_static(steps, STATIC_TOLERANCE, STATIC_MAX_ITERATIONS).map_err(|source| SimError::Static {
                     file: file.clone(),
-                    location: sc_cable.location,
-                    cable: n.name.clone(),
+                    location,
+                    cable: n.label(),
                     source: Box::new(source),
                 })?;
             }
@@ -450,7 +499,7 @@ impl World {
             if let Err((h, source)) = cc.start_velocities(&exact) {
                 let name = name_of(&rapier, h);
                 let who = scenario.body(&name).expect("a scenario body");
-                return Err(SimError::InitialVelocity { file: file.clone(), location: who.location, body: name, cable: n.name.clone(), source: Box::new(source) });
+                return Err(SimError::InitialVelocity { file: file.clone(), location: who.location, body: name, cable: n.label(), source: Box::new(source) });
             }
         }
         let substeps = sim.substeps.unwrap_or(1);
@@ -468,7 +517,7 @@ impl World {
                 let k = ratio * b.mass / (h * h);
                 warnings.push(format!(
                     "cable `{}` {} on body `{}` is coupled explicitly with k·h²/m = {ratio:.3e} > 1 (k = EA/L_e = {k:.4e} N/m, h = {h} s, m = {} kg): it may be unstable unless joints hold the body; `substeps = {}` would bring it to 1 (see docs/scenario.md \"Explicit coupling\")",
-                    names[i].name,
+                    names[i].ropes[0],
                     if start { "start" } else { "end" },
                     b.name,
                     b.mass,
@@ -502,7 +551,7 @@ impl World {
             }
             let failures = self.core.step(&mut self.rapier.pw.bodies, &mut self.rapier.pw.impulse_joints, h, 1, &|_| BodyInputs::default());
             if let Some((i, time, source)) = failures.into_iter().next() {
-                return Err(SimError::Diverged { cable: self.names[i].name.clone(), time, source: Box::new(source) });
+                return Err(SimError::Diverged { cable: self.names[i].label(), time, source: Box::new(source) });
             }
             self.rapier.prepare_step(t, h);
             self.rapier.step().map_err(|body| SimError::BodyDiverged { body, time: t })?;
@@ -522,13 +571,22 @@ impl World {
             .cables
             .iter()
             .zip(&self.names)
-            .flat_map(|(cc, n)| cc.followers.iter().filter(|f| f.dynamic).map(move |f| (n.name.as_str(), name(f.body), f.start, f.reaction.0, f.reaction.1)))
+            .flat_map(|(cc, n)| cc.followers.iter().filter(|f| f.dynamic).map(move |f| (n.ropes[0].as_str(), name(f.body), f.start, f.reaction.0, f.reaction.1)))
             .collect()
     }
 
-    /// The cable named `name`.
+    /// The cable named `name`, when it has its own chain; `None` for an
+    /// unknown name and for a cable whose rope is grafted onto another
+    /// cable's chain at a hub (see [`World::rope`]).
     pub fn cable(&self, name: &str) -> Option<&Cable> {
-        self.names.iter().position(|n| n.name == name).map(|i| &self.core.cables[i].cable)
+        self.names.iter().position(|n| n.ropes[0] == name).map(|i| &self.core.cables[i].cable)
+    }
+
+    /// The rope of the cable named `name`, in the direction the scenario
+    /// gives it, wherever it is solved: its own chain, or a limb of another
+    /// cable's chain (a sling leg on a hub body).
+    pub fn rope(&self, name: &str) -> Option<RopeView<'_>> {
+        self.names.iter().enumerate().find_map(|(i, n)| n.ropes.iter().position(|r| r == name).and_then(|k| self.core.cables[i].cable.rope(k)))
     }
 
     /// Appends the current value of every probe column (file order) to `out`.
@@ -590,7 +648,7 @@ impl World {
                 })
             }
             ProbeTarget::Cable(name) => {
-                let c = self.cable(name).expect("probe targets are validated");
+                let c = self.rope(name).expect("probe targets are validated");
                 let s = p.s.unwrap_or(0.0);
                 match p.quantity {
                     Quantity::Position => Probe::Vector(c.point_at(s).0),
@@ -631,7 +689,7 @@ impl World {
 
     /// Names of the cables.
     pub fn cable_names(&self) -> Vec<&str> {
-        self.names.iter().map(|n| n.name.as_str()).collect()
+        self.scenario.cables.iter().map(|c| c.name.as_str()).collect()
     }
 
     /// Newton iterations, residual evaluations and solves of all cables so far.
