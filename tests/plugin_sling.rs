@@ -114,3 +114,34 @@ fn two_leg_sling_in_the_plugin_hangs_on_the_catenary_and_swings() {
     assert!(e(measured, period).abs() < 2e-4, "period {measured} vs {period}");
     assert!(e(peak, amp).abs() < 0.05, "amplitude {peak} vs {amp}");
 }
+
+/// A loop through two dynamic bodies (a box on a rope from the world and on
+/// a rope from a block, the block on a rope from the world) is refused at
+/// creation: every cable of the island gets a `CableDiverged` message, the
+/// first naming both bodies, and none is built.
+#[test]
+fn a_loop_through_two_dynamic_bodies_is_refused_by_name() {
+    let mut app = plugin_app::headless_app(DT);
+    let w = app.world_mut();
+    let body = |w: &mut World, y: f32, x: f32| {
+        w.spawn((RigidBody::Dynamic, Transform::from_xyz(x, y, 0.0), Collider::ball(0.2), ColliderMassProperties::Mass(50.0))).id()
+    };
+    let (boxed, block) = (body(w, -8.0, 0.0), body(w, -3.0, 6.0));
+    let section = preset("steel_wire_rope_6x36_iwrc", 0.02).unwrap();
+    let mut cable = |w: &mut World, start: CableAnchor, end: CableAnchor, len: f64| w.spawn(CableDescriptor::new(len, 4, section, 0.02, start, end)).id();
+    let at = |entity| CableAnchor::Body { entity, anchor: Vec3::ZERO, clamp: false };
+    let world = |x: f32| CableAnchor::World { point: Vec3::new(x, 0.0, 0.0), clamp: false };
+    let cables = [cable(w, world(-6.0), at(boxed), 10.0), cable(w, at(block), at(boxed), 7.9), cable(w, world(6.0), at(block), 3.0)];
+    let mut messages = Vec::new();
+    for _ in 0..2 {
+        app.update();
+        messages.extend(app.world().resource::<Messages<CableDiverged>>().iter_current_update_messages().map(|m| (m.entity, m.message.clone())));
+    }
+    println!("{messages:#?}");
+    for c in cables {
+        assert!(messages.iter().any(|(e, _)| *e == c), "cable {c} reported");
+        assert!(app.world().get::<CableSim>(c).is_none() && app.world().get::<CableRopeOf>(c).is_none());
+    }
+    let (b, k) = (boxed.to_string(), block.to_string());
+    assert!(messages.iter().any(|(_, m)| m.contains(&b) && m.contains(&k) && m.contains("loop through two dynamic bodies")), "{messages:?}");
+}
