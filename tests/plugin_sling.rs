@@ -128,7 +128,7 @@ fn a_loop_through_two_dynamic_bodies_is_refused_by_name() {
     };
     let (boxed, block) = (body(w, -8.0, 0.0), body(w, -3.0, 6.0));
     let section = preset("steel_wire_rope_6x36_iwrc", 0.02).unwrap();
-    let mut cable = |w: &mut World, start: CableAnchor, end: CableAnchor, len: f64| w.spawn(CableDescriptor::new(len, 4, section, 0.02, start, end)).id();
+    let cable = |w: &mut World, start: CableAnchor, end: CableAnchor, len: f64| w.spawn(CableDescriptor::new(len, 4, section, 0.02, start, end)).id();
     let at = |entity| CableAnchor::Body { entity, anchor: Vec3::ZERO, clamp: false };
     let world = |x: f32| CableAnchor::World { point: Vec3::new(x, 0.0, 0.0), clamp: false };
     let cables = [cable(w, world(-6.0), at(boxed), 10.0), cable(w, at(block), at(boxed), 7.9), cable(w, world(6.0), at(block), 3.0)];

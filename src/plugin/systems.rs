@@ -16,8 +16,8 @@ use std::collections::HashMap;
 type NotBuilt = (Without<CableSim>, Without<CableRopeOf>);
 
 /// Builds cables from new [`CableDescriptor`]s, all new ones of a step
-/// together (so a body at the ends of two new cables is coupled explicitly
-/// to both).
+/// together (so a body at the ends of two new cables is solved with both
+/// as one island, see the module docs).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn init_cables(
     mut commands: Commands,
@@ -73,19 +73,7 @@ pub(crate) fn init_cables(
     // Entities of the bodies and cables of the batch, for messages.
     let entity_of: HashMap<RigidBodyHandle, Entity> = owners.iter().flat_map(|(_, ends)| ends.iter().flatten().map(|(e, h)| (*h, *e))).collect();
     let batch: Vec<Entity> = owners.iter().map(|(e, _)| *e).collect();
-    let message = |e: &CouplingError| {
-        match e {
-        CouplingError::HubLoop { hub, other } if hub == other => {
-            format!("the cable runs from body {} to itself; that body hangs on several cables and is solved with them as one island, where a cable's other end must be the world, a fixed or kinematic body, or free", entity_of[hub])
-        }
-        CouplingError::HubLoop { hub, other } => format!(
-            "body {} hangs on several cables and is solved with them as one island, but the cable from it to dynamic body {} would close a loop through two dynamic bodies, which the island solve does not handle; make one of them fixed or kinematic, hang the other on a single cable, or hold it with a joint (then it is coupled explicitly)",
-            entity_of[hub], entity_of[other]
-        ),
-        CouplingError::Island { cable } => format!("the cable is solved as one island with cable {} (they hold the same body), which could not be built", batch[*cable]),
-        e => e.to_string(),
-    }
-    };
+    let message = |e: &CouplingError| refusal(e, &entity_of, &batch);
     let mut sims: Vec<Option<CableSim>> = Vec::new();
     let mut ropes = Vec::new();
     for ((entity, ends), r) in owners.iter().copied().zip(built) {
@@ -149,6 +137,27 @@ pub(crate) fn init_cables(
         if let Some(sim) = sim {
             commands.entity(entity).insert((sim, CableState::default()));
         }
+    }
+}
+
+/// Why a cable of the batch `batch` was not built, with entities for the
+/// core's rapier handles and batch indices.
+fn refusal(e: &CouplingError, entity_of: &HashMap<RigidBodyHandle, Entity>, batch: &[Entity]) -> String {
+    let name = |h: &RigidBodyHandle| entity_of.get(h).map_or_else(|| format!("{h:?}"), |e| e.to_string());
+    match e {
+        CouplingError::HubLoop { hub, other } if hub == other => format!(
+            "the cable runs from body {} to itself; that body hangs on several cables and is solved with them as one island, where a cable's other end must be the world, a fixed or kinematic body, or free",
+            name(hub)
+        ),
+        CouplingError::HubLoop { hub, other } => format!(
+            "body {} hangs on several cables and is solved with them as one island, but the cable from it to dynamic body {} would close a loop through two dynamic bodies, which the island solve does not handle; make one of them fixed or kinematic, hang the other on a single cable, or hold it with a joint (then it is coupled explicitly)",
+            name(hub),
+            name(other)
+        ),
+        CouplingError::Island { cable } => {
+            format!("the cable is solved as one island with cable {} (they hold the same body), which could not be built", batch[*cable])
+        }
+        e => e.to_string(),
     }
 }
 
