@@ -220,7 +220,7 @@ pub enum CouplingError {
     },
     /// A body solved as a hub (on several cables) would close a loop
     /// through another dynamic body, or a cable runs from the hub to itself.
-    #[error("{}", hub_loop_message(*hub, *other))]
+    #[error("{}", self.default_names())]
     HubLoop {
         /// The hub body (dynamic, on several cables, no joints).
         hub: rp::RigidBodyHandle,
@@ -229,7 +229,7 @@ pub enum CouplingError {
         other: rp::RigidBodyHandle,
     },
     /// Another cable of the same island could not be built.
-    #[error("this cable holds the same body as cable #{cable} of the batch and is solved with it as one island, and that cable could not be built")]
+    #[error("{}", self.default_names())]
     Island {
         /// Index (in the batch) of the cable that failed.
         cable: usize,
@@ -242,16 +242,32 @@ pub enum CouplingError {
     Cable(Box<CableError>),
 }
 
-fn hub_loop_message(hub: rp::RigidBodyHandle, other: rp::RigidBodyHandle) -> String {
-    let name = |h: rp::RigidBodyHandle| format!("rapier body #{}", h.into_raw_parts().0);
-    if hub == other {
-        return format!("a cable runs from {} to itself; it hangs on several cables and is solved with them as one island, where a cable must end on the world, a fixed or kinematic body, or nothing", name(hub));
+impl CouplingError {
+    /// The message, with the bodies and batch cables named by the adapter
+    /// (`body`: a rapier handle's name, e.g. "body `box`"; `cable`: a batch
+    /// index's name, e.g. "cable `leg_a`"). [`Display`](std::fmt::Display)
+    /// names them "rapier body #i" and "cable #k of the batch".
+    pub fn describe(&self, body: &dyn Fn(rp::RigidBodyHandle) -> String, cable: &dyn Fn(usize) -> String) -> String {
+        match *self {
+            CouplingError::HubLoop { hub, other } if hub == other => format!(
+                "the cable runs from {} to itself; that body hangs on several cables and is solved with them as one island, where a cable's other end must be the world, a fixed or kinematic body, or free",
+                body(hub)
+            ),
+            CouplingError::HubLoop { hub, other } => format!(
+                "{} hangs on several cables and is solved with them as one island, but the cable from it to the dynamic {} would close a loop through two dynamic bodies, which the island solve does not handle; make one of them fixed or kinematic, hang the other on a single cable, or hold it with a joint (then it is coupled explicitly)",
+                body(hub),
+                body(other)
+            ),
+            CouplingError::Island { cable: k } => {
+                format!("the cable is solved as one island with {} (they hold the same body), which could not be built", cable(k))
+            }
+            ref e => e.to_string(),
+        }
     }
-    format!(
-        "{} hangs on several cables and is solved with them as one island, but the cable between it and {} (dynamic) would close a loop through two dynamic bodies, which the island solve does not handle; make one of them fixed or kinematic, hang the other on a single cable, or hold it with a joint (then it is coupled explicitly)",
-        name(hub),
-        name(other)
-    )
+
+    fn default_names(&self) -> String {
+        self.describe(&|h| format!("rapier body #{}", h.into_raw_parts().0), &|k| format!("cable #{k} of the batch"))
+    }
 }
 
 /// A body that is a link of a cable's chain.
@@ -387,23 +403,20 @@ type Uses = Vec<(usize, usize)>;
 /// a limb cannot be grafted.
 fn hubs(
     specs: &[&CableSpec],
+    batch: &HashMap<rp::RigidBodyHandle, Uses>,
     existing: &[&CoupledCable],
     bodies: &rp::RigidBodySet,
     joints: &rp::ImpulseJointSet,
 ) -> HashMap<rp::RigidBodyHandle, Result<usize, CouplingError>> {
-    let mut uses: HashMap<rp::RigidBodyHandle, Uses> = HashMap::new();
-    for (i, s) in specs.iter().enumerate() {
-        for (k, a) in [&s.start, &s.end].into_iter().enumerate() {
-            if let Attach::Body { body, .. } = a {
-                uses.entry(*body).or_default().push((i, k));
-            }
-        }
-    }
     let dynamic = |h: &rp::RigidBodyHandle| bodies.get(*h).is_some_and(|rb| rb.is_dynamic());
-    uses.retain(|hub, at| {
-        let used_before = existing.iter().any(|c| c.role_of(*hub).is_some());
-        at.len() >= 2 && dynamic(hub) && !used_before && joints.attached_joints(*hub).next().is_none() && at.iter().any(|(_, k)| *k == 1)
-    });
+    let uses: HashMap<rp::RigidBodyHandle, &Uses> = batch
+        .iter()
+        .filter(|(hub, at)| {
+            let used_before = existing.iter().any(|c| c.role_of(**hub).is_some());
+            at.len() >= 2 && dynamic(hub) && !used_before && joints.attached_joints(**hub).next().is_none() && at.iter().any(|(_, k)| *k == 1)
+        })
+        .map(|(h, at)| (*h, at))
+        .collect();
     let mut out = HashMap::new();
     for (&hub, at) in &uses {
         // The other end of each cable on the hub, when it is a dynamic body.
@@ -439,20 +452,18 @@ pub fn classify(
     bodies: &rp::RigidBodySet,
     joints: &rp::ImpulseJointSet,
 ) -> Vec<Result<Classified, CouplingError>> {
-    let mut uses: HashMap<rp::RigidBodyHandle, usize> = HashMap::new();
-    for s in specs {
-        for a in [&s.start, &s.end] {
+    // Each body's attachments in the batch.
+    let mut batch: HashMap<rp::RigidBodyHandle, Uses> = HashMap::new();
+    for (i, s) in specs.iter().enumerate() {
+        for (k, a) in [&s.start, &s.end].into_iter().enumerate() {
             if let Attach::Body { body, .. } = a {
-                *uses.entry(*body).or_default() += 1;
+                batch.entry(*body).or_default().push((i, k));
             }
         }
     }
-    for c in existing {
-        for (b, _) in c.all_roles() {
-            *uses.entry(*b).or_default() += 1;
-        }
-    }
-    let hubs = hubs(specs, existing, bodies, joints);
+    // Its attachments in all: the batch's and the existing cables'.
+    let uses = |b: rp::RigidBodyHandle| batch.get(&b).map_or(0, Vec::len) + existing.iter().flat_map(|c| c.all_roles()).filter(|(h, _)| *h == b).count();
+    let hubs = hubs(specs, &batch, existing, bodies, joints);
     specs
         .iter()
         .enumerate()
@@ -478,7 +489,7 @@ pub fn classify(
                     Role::Carried
                 } else if !rb.is_dynamic() {
                     Role::Base
-                } else if uses[body] != 1 {
+                } else if uses(*body) != 1 {
                     Role::Explicit
                 } else {
                     let attached: Vec<_> = joints.attached_joints(*body).collect();

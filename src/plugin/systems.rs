@@ -126,8 +126,7 @@ pub(crate) fn init_cables(
     // (it fails with its ropes: initial velocities).
     for (entity, onto, part) in ropes {
         if sims[onto].is_none() {
-            let message = format!("the cable is solved as one island with cable {} (they hold the same body), which could not be built", batch[onto]);
-            diverged.write(CableDiverged { entity, time: 0.0, message });
+            diverged.write(CableDiverged { entity, time: 0.0, message: message(&CouplingError::Island { cable: onto }) });
             commands.entity(entity).remove::<CableDescriptor>();
             continue;
         }
@@ -143,22 +142,8 @@ pub(crate) fn init_cables(
 /// Why a cable of the batch `batch` was not built, with entities for the
 /// core's rapier handles and batch indices.
 fn refusal(e: &CouplingError, entity_of: &HashMap<RigidBodyHandle, Entity>, batch: &[Entity]) -> String {
-    let name = |h: &RigidBodyHandle| entity_of.get(h).map_or_else(|| format!("{h:?}"), |e| e.to_string());
-    match e {
-        CouplingError::HubLoop { hub, other } if hub == other => format!(
-            "the cable runs from body {} to itself; that body hangs on several cables and is solved with them as one island, where a cable's other end must be the world, a fixed or kinematic body, or free",
-            name(hub)
-        ),
-        CouplingError::HubLoop { hub, other } => format!(
-            "body {} hangs on several cables and is solved with them as one island, but the cable from it to dynamic body {} would close a loop through two dynamic bodies, which the island solve does not handle; make one of them fixed or kinematic, hang the other on a single cable, or hold it with a joint (then it is coupled explicitly)",
-            name(hub),
-            name(other)
-        ),
-        CouplingError::Island { cable } => {
-            format!("the cable is solved as one island with cable {} (they hold the same body), which could not be built", batch[*cable])
-        }
-        e => e.to_string(),
-    }
+    let body = |h: RigidBodyHandle| format!("body {}", entity_of.get(&h).map_or_else(|| format!("{h:?}"), |e| e.to_string()));
+    e.describe(&body, &|k| format!("cable {}", batch[k]))
 }
 
 /// The rapier motor of a trolley's prismatic joint, as a spring and damper

@@ -415,20 +415,10 @@ impl World {
                         format!("cable `{}` with an end clamped to spinning body `{body}` (clamp the `start` instead)", c.name)
                     })
                 }
-                CouplingError::HubLoop { hub, other } => {
-                    let (hub, other) = (name_of(&rapier, hub), name_of(&rapier, other));
-                    let message = if hub == other {
-                        format!("cable `{}` runs from body `{hub}` to itself (`{hub}` hangs on several cables and is solved with them as one island, where a cable's other end must be the world, a fixed or kinematic body, or free)", c.name)
-                    } else {
-                        format!("cable `{}`: body `{hub}` hangs on several cables and is solved with them as one island, but a cable from it to dynamic body `{other}` would close a loop through two dynamic bodies, which the island solve does not handle; make one of them fixed or kinematic, hang `{other}` on a single cable, or hold it with a joint (then it is coupled explicitly)", c.name)
-                    };
-                    SimError::Invalid { file: file.clone(), location: c.location, message }
+                e @ (CouplingError::HubLoop { .. } | CouplingError::Island { .. }) => {
+                    let message = e.describe(&|h| format!("body `{}`", name_of(&rapier, h)), &|k| format!("cable `{}`", scenario.cables[k].name));
+                    SimError::Invalid { file: file.clone(), location: c.location, message: format!("cable `{}`: {message}", c.name) }
                 }
-                CouplingError::Island { cable } => SimError::Invalid {
-                    file: file.clone(),
-                    location: c.location,
-                    message: format!("cable `{}`: solved as one island with cable `{}`, which could not be built", c.name, scenario.cables[cable].name),
-                },
                 e => SimError::Invalid { file: file.clone(), location: c.location, message: format!("cable `{}`: {e}", c.name) },
             });
         }
