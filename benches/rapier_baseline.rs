@@ -135,9 +135,7 @@ impl RapierRope {
             parent_anchor = Vector::new(0.0, -0.5 * le, 0.0);
         }
         let pr = RADIUS as f32;
-        let payload = bodies.insert(
-            RigidBodyBuilder::dynamic().translation(dir * (LENGTH as f32 + pr)).rotation(rot).can_sleep(false),
-        );
+        let payload = bodies.insert(RigidBodyBuilder::dynamic().translation(dir * (LENGTH as f32 + pr)).rotation(rot).can_sleep(false));
         colliders.insert_with_parent(ColliderBuilder::ball(pr).mass(PAYLOAD as f32), payload, &mut bodies);
         joint(parent, parent_anchor, payload, Vector::new(0.0, pr, 0.0));
         let mut params = IntegrationParameters { dt: DT as f32, ..IntegrationParameters::default() };
@@ -264,7 +262,9 @@ fn stretch_report(sizes: &[usize], max_stretch_run_s: f64) {
     let physical = PAYLOAD * G * LENGTH / EA + MU * G * LENGTH * LENGTH / (2.0 * EA);
     println!("== stretch of the hanging rope (top anchor → payload attachment, minus L = 20 m), mm ==");
     println!("physical (elastic, static): mgL/EA + μgL²/(2EA) = {:.3} mm", 1e3 * physical);
-    println!("columns: mean [min … max] over 4–5 s after release at rest, straight & unstretched | same over 29–30 s | largest while swinging from 30° (0–10 s)");
+    println!(
+        "columns: mean [min … max] over 4–5 s after release at rest, straight & unstretched | same over 29–30 s | largest while swinging from 30° (0–10 s)"
+    );
     let hang = 300;
     let win = 60;
     for &n in sizes {
@@ -376,8 +376,7 @@ fn bench<M: Measurement>(mut c: Criterion<M>, sizes: &[usize], max_mb: f64) {
                     let per = cpu_since(t0) / k as f64;
                     manual.push(format!(
                         "rapier_step/{}/{n}: {:.3} s CPU per step (mean of {k} steps after the first, timed by hand; t < 0.1 s after release)",
-                        label,
-                        per
+                        label, per
                     ));
                     continue;
                 }

@@ -346,8 +346,7 @@ fn exponent(points: &[(f64, f64)]) -> Option<f64> {
     }
     let k = points.len() as f64;
     let (mx, my) = points.iter().fold((0.0, 0.0), |(a, b), (n, t)| (a + n.ln() / k, b + t.ln() / k));
-    let (sxy, sxx) =
-        points.iter().fold((0.0, 0.0), |(a, b), (n, t)| (a + (n.ln() - mx) * (t.ln() - my), b + (n.ln() - mx).powi(2)));
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(a, b), (n, t)| (a + (n.ln() - mx) * (t.ln() - my), b + (n.ln() - mx).powi(2)));
     Some(sxy / sxx)
 }
 
@@ -400,8 +399,7 @@ fn report(work: &[(usize, &Work)]) {
     }
     // Local slopes, to see where the cost per element changes.
     for (g, pts) in &fits {
-        let local: Vec<String> =
-            pts.windows(2).map(|w| format!("{}→{}: {:.2}", w[0].0, w[1].0, (w[1].1 / w[0].1).ln() / (w[1].0 / w[0].0).ln())).collect();
+        let local: Vec<String> = pts.windows(2).map(|w| format!("{}→{}: {:.2}", w[0].0, w[1].0, (w[1].1 / w[0].1).ln() / (w[1].0 / w[0].0).ln())).collect();
         if !local.is_empty() {
             println!("local exponents of {g}: {}", local.join(", "));
         }

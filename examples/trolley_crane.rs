@@ -53,9 +53,8 @@ fn setup(mut commands: Commands) {
             ImpulseJoint::new(rail, PrismaticJointBuilder::new(Vec3::X)),
         ))
         .id();
-    let payload = commands
-        .spawn((Payload, RigidBody::Dynamic, Transform::from_xyz(0.0, 1.45, 0.0), Collider::ball(0.3), ColliderMassProperties::Mass(1000.0)))
-        .id();
+    let payload =
+        commands.spawn((Payload, RigidBody::Dynamic, Transform::from_xyz(0.0, 1.45, 0.0), Collider::ball(0.3), ColliderMassProperties::Mass(1000.0))).id();
     let section = preset("steel_wire_rope_6x36_iwrc", 0.020).expect("known preset");
     commands.spawn(CableDescriptor::new(
         10.0,
@@ -92,7 +91,11 @@ fn report(
         let sway = (p.translation.x - t.translation.x).atan2(t.translation.y - p.translation.y).to_degrees();
         println!(
             "t = {:5.2} s  trolley x = {:6.3} m  sway = {:6.2}°  top tension = {:7.0} N  ({} Newton iterations)",
-            state.time, t.translation.x, sway, state.tensions.first().copied().unwrap_or(0.0), state.newton_iterations
+            state.time,
+            t.translation.x,
+            sway,
+            state.tensions.first().copied().unwrap_or(0.0),
+            state.newton_iterations
         );
     }
     if frames.0 == 0 {

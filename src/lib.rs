@@ -26,15 +26,15 @@
 #![warn(missing_docs)]
 
 pub mod cable;
-pub mod integrate;
-pub mod output;
-pub mod scenario;
 #[cfg(feature = "rapier")]
 pub mod coupling;
-#[cfg(feature = "rapier")]
-pub mod sim;
+pub mod integrate;
+pub mod output;
 #[cfg(feature = "app")]
 pub mod plugin;
+pub mod scenario;
+#[cfg(feature = "rapier")]
+pub mod sim;
 
 /// The README's code examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

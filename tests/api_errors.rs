@@ -35,14 +35,8 @@ fn rope_builder_rejects_bad_parameters_by_name() {
         (base().gravity(DVec3::new(0.0, f64::NAN, 0.0)), "gravity"),
         (base().end_stiffness_factor(f64::NAN), "end_stiffness_factor"),
         (base().end_stiffness_factor(0.0), "end_stiffness_factor"),
-        (
-            base().end(RopeEnd::Body { body: LumpedBody::sphere(-5.0, 0.3, DVec3::new(0.0, -20.3, 0.0)), anchor: DVec3::Y * 0.3, clamp: false }),
-            "end body",
-        ),
-        (
-            base().end(RopeEnd::Body { body: LumpedBody::sphere(f64::NAN, 0.3, DVec3::new(0.0, -20.3, 0.0)), anchor: DVec3::Y * 0.3, clamp: false }),
-            "end body",
-        ),
+        (base().end(RopeEnd::Body { body: LumpedBody::sphere(-5.0, 0.3, DVec3::new(0.0, -20.3, 0.0)), anchor: DVec3::Y * 0.3, clamp: false }), "end body"),
+        (base().end(RopeEnd::Body { body: LumpedBody::sphere(f64::NAN, 0.3, DVec3::new(0.0, -20.3, 0.0)), anchor: DVec3::Y * 0.3, clamp: false }), "end body"),
     ];
     for (builder, expected) in cases {
         let err = builder.build().expect_err(expected);
@@ -68,11 +62,7 @@ fn rope_builder_rejects_bad_paths() {
 #[test]
 fn set_link_velocities_rejects_bad_targets() {
     let body = LumpedBody::sphere(1000.0, 0.3, DVec3::new(0.0, -20.3, 0.0));
-    let model = RopeBuilder::new(20.0, 10, section(), 0.02)
-        .start(pinned())
-        .end(RopeEnd::Body { body, anchor: DVec3::Y * 0.3, clamp: false })
-        .build()
-        .unwrap();
+    let model = RopeBuilder::new(20.0, 10, section(), 0.02).start(pinned()).end(RopeEnd::Body { body, anchor: DVec3::Y * 0.3, clamp: false }).build().unwrap();
     let mut c = Cable::new(model, Scheme::default()).unwrap();
     let n = c.state.q.len();
     let ok = LinkVelocity { link: n - 1, point: DVec3::ZERO, linear: DVec3::X, angular: DVec3::ZERO };

@@ -65,7 +65,11 @@ fn large_amplitude_pendulum_period() {
         let t0 = 2.0 * std::f64::consts::PI * (i_pivot / (moment * g)).sqrt();
         let exact = t0 * ratio;
         let err = (period - exact) / exact;
-        println!("{deg}°: period {period:.5} s vs {exact:.5} s ({err:+.2e}), {} periods, {:.2} Newton iterations/step", c.len() - 1, iters as f64 / ts.len() as f64);
+        println!(
+            "{deg}°: period {period:.5} s vs {exact:.5} s ({err:+.2e}), {} periods, {:.2} Newton iterations/step",
+            c.len() - 1,
+            iters as f64 / ts.len() as f64
+        );
         assert!(err.abs() < 5e-4, "period error {err}");
     }
 }
@@ -108,7 +112,8 @@ fn trolley_pendulum_coupled_period_and_momentum() {
     for (deg, t_ref, p2p_ref) in [(5.0f64, 3.667783, 0.290519), (30.0, 3.843178, 1.666667)] {
         let phi = deg.to_radians();
         let dir = DVec3::new(phi.sin(), -phi.cos(), 0.0);
-        let trolley = LumpedBody { mass: big_m, inertia: DMat3::from_diagonal(DVec3::splat(100.0)), position: DVec3::ZERO, rotation: DMat3::IDENTITY, com: DVec3::ZERO };
+        let trolley =
+            LumpedBody { mass: big_m, inertia: DMat3::from_diagonal(DVec3::splat(100.0)), position: DVec3::ZERO, rotation: DMat3::IDENTITY, com: DVec3::ZERO };
         let r = 0.01;
         // Rope length l − r so the payload centre is at l from the rail.
         let payload = LumpedBody::sphere(m, r, dir * l);
@@ -127,10 +132,12 @@ fn trolley_pendulum_coupled_period_and_momentum() {
             ts.push(cable.time());
             vs.push(cable.state.v[0]);
             xs.push(cable.state.q[0]);
-            let p: f64 = (0..cable.model.chain.len()).map(|s| {
-                let ch = &cable.model.chain;
-                ch.joints[s].link.map_or(0.0, |lm| lm.mass * ch.link_point_velocity(s, lm.com).x)
-            }).sum();
+            let p: f64 = (0..cable.model.chain.len())
+                .map(|s| {
+                    let ch = &cable.model.chain;
+                    ch.joints[s].link.map_or(0.0, |lm| lm.mass * ch.link_point_velocity(s, lm.com).x)
+                })
+                .sum();
             worst_p = worst_p.max(p.abs());
         }
         let c = upward_crossings(&ts, &vs);
@@ -270,8 +277,7 @@ fn initial_payload_velocity_swings_the_rope_in_its_deflection_shape() {
     let mut c = Cable::new(model, Scheme::default()).unwrap();
     c.solve_static(1, 1e-10, 500).unwrap();
     let body = c.model.layout.end_body.unwrap();
-    c.set_link_velocities(&[LinkVelocity { link: body.link, point: body.origin, linear: DVec3::new(u0, 0.0, 0.0), angular: DVec3::ZERO }])
-        .unwrap();
+    c.set_link_velocities(&[LinkVelocity { link: body.link, point: body.origin, linear: DVec3::new(u0, 0.0, 0.0), angular: DVec3::ZERO }]).unwrap();
     let (_, _, v, w) = c.model.body_state(&body);
     println!("payload velocity {v:?} m/s, angular {w:?} rad/s");
     assert!(v.distance(DVec3::new(u0, 0.0, 0.0)) < 1e-9 && w.length() < 1e-9);

@@ -79,10 +79,8 @@ fn swing(n: usize, scheme: Scheme, h: f64) -> Result<Swing, String> {
         }
     }
     let ms_per_step = 1e3 * start.elapsed().as_secs_f64() / steps as f64;
-    let c: Vec<f64> = (1..xs.len())
-        .filter(|&k| (xs[k - 1] < 0.0) != (xs[k] < 0.0))
-        .map(|k| ts[k - 1] + (ts[k] - ts[k - 1]) * (-xs[k - 1]) / (xs[k] - xs[k - 1]))
-        .collect();
+    let c: Vec<f64> =
+        (1..xs.len()).filter(|&k| (xs[k - 1] < 0.0) != (xs[k] < 0.0)).map(|k| ts[k - 1] + (ts[k] - ts[k - 1]) * (-xs[k - 1]) / (xs[k] - xs[k - 1])).collect();
     let period = if c.len() >= 3 { 2.0 * (c[c.len() - 1] - c[0]) / (c.len() - 1) as f64 } else { f64::NAN };
     let s = cable.total_stats;
     let k = cable.steps as f64;

@@ -9,8 +9,7 @@
 use std::f64::consts::{PI, TAU};
 
 use bevy_rapier_cable::integrate::{
-    stability_limit, DenseSystem, IntegrateError, Integrator, NewtonSettings, Pendulum, Scheme,
-    SecondOrderSystem, State, StepStats, Substeps, SystemError,
+    stability_limit, DenseSystem, IntegrateError, Integrator, NewtonSettings, Pendulum, Scheme, SecondOrderSystem, State, StepStats, Substeps, SystemError,
 };
 
 // ---------------------------------------------------------------- helpers
@@ -159,8 +158,7 @@ fn reference_run(r: Reference, scheme: &Scheme, omega: f64, h: f64, steps: usize
         match r {
             Reference::ChungHulbert { am, af, beta, gamma } => {
                 let pred = x + h * v + h * h * (0.5 - beta) * a;
-                let a1 = -(am * a + w2 * (1.0 - af) * pred + w2 * af * x)
-                    / ((1.0 - am) + w2 * (1.0 - af) * beta * h * h);
+                let a1 = -(am * a + w2 * (1.0 - af) * pred + w2 * af * x) / ((1.0 - am) + w2 * (1.0 - af) * beta * h * h);
                 x = pred + h * h * beta * a1;
                 v += h * ((1.0 - gamma) * a + gamma * a1);
                 a = a1;
@@ -197,36 +195,86 @@ struct ExactRow {
 fn exact_rows() -> Vec<ExactRow> {
     let nm = |beta, gamma| Scheme::Newmark { beta, gamma };
     vec![
-        ExactRow { label: "central difference (Newmark beta=0)", scheme: nm(0.0, 0.5), reference: newmark(0.0, 0.5),
-            printed: ["+0.994148", "-0.644362", "+0.469265", "-5.267497"] },
-        ExactRow { label: "Newmark average acceleration", scheme: nm(0.25, 0.5), reference: newmark(0.25, 0.5),
-            printed: ["+0.980995", "+1.219131", "-0.372682", "+5.830540"] },
-        ExactRow { label: "linear acceleration", scheme: Scheme::LinearAcceleration, reference: newmark(1.0 / 6.0, 0.5),
-            printed: ["+0.995108", "+0.610470", "+0.549028", "+5.164403"] },
-        ExactRow { label: "Fox-Goodwin (beta=1/12)", scheme: nm(1.0 / 12.0, 0.5), reference: newmark(1.0 / 12.0, 0.5),
-            printed: ["+0.999998", "-0.012601", "+0.999785", "-0.126002"] },
-        ExactRow { label: "Wilson theta=1.4", scheme: Scheme::WilsonTheta { theta: 1.4 },
+        ExactRow {
+            label: "central difference (Newmark beta=0)",
+            scheme: nm(0.0, 0.5),
+            reference: newmark(0.0, 0.5),
+            printed: ["+0.994148", "-0.644362", "+0.469265", "-5.267497"],
+        },
+        ExactRow {
+            label: "Newmark average acceleration",
+            scheme: nm(0.25, 0.5),
+            reference: newmark(0.25, 0.5),
+            printed: ["+0.980995", "+1.219131", "-0.372682", "+5.830540"],
+        },
+        ExactRow {
+            label: "linear acceleration",
+            scheme: Scheme::LinearAcceleration,
+            reference: newmark(1.0 / 6.0, 0.5),
+            printed: ["+0.995108", "+0.610470", "+0.549028", "+5.164403"],
+        },
+        ExactRow {
+            label: "Fox-Goodwin (beta=1/12)",
+            scheme: nm(1.0 / 12.0, 0.5),
+            reference: newmark(1.0 / 12.0, 0.5),
+            printed: ["+0.999998", "-0.012601", "+0.999785", "-0.126002"],
+        },
+        ExactRow {
+            label: "Wilson theta=1.4",
+            scheme: Scheme::WilsonTheta { theta: 1.4 },
             reference: Reference::WilsonBathe { theta: 1.4 },
-            printed: ["+0.884260", "+1.767101", "-0.396619", "-1.162049"] },
-        ExactRow { label: "HHT alpha=-0.1", scheme: Scheme::Hht { alpha: -0.1 }, reference: hht(-0.1),
-            printed: ["+0.960976", "+1.435213", "-0.641688", "+3.781674"] },
-        ExactRow { label: "HHT alpha=-0.3", scheme: Scheme::Hht { alpha: -0.3 }, reference: hht(-0.3),
-            printed: ["+0.942739", "+1.653808", "-0.751774", "+1.720759"] },
-        ExactRow { label: "generalized-alpha rho_inf=0.5", scheme: Scheme::GeneralizedAlpha { rho_inf: 0.5 },
-            reference: chung_hulbert(0.5), printed: ["+0.942378", "+1.664414", "-0.752852", "+1.678584"] },
-        ExactRow { label: "explicit Euler", scheme: Scheme::ExplicitEuler, reference: Reference::Matrix,
-            printed: ["+4.126585", "+20.683999", "+1.5126e7", "+4.5962e7"] },
-        ExactRow { label: "Heun / improved Euler", scheme: Scheme::ImprovedEuler, reference: Reference::Matrix,
-            printed: ["+1.133532", "-2.670645", "-6.100030", "+18.320745"] },
-        ExactRow { label: "RK4", scheme: Scheme::Rk4, reference: Reference::Matrix,
-            printed: ["+0.995920", "+0.044066", "+0.957799", "+0.424487"] },
-        ExactRow { label: "symplectic Euler (v first)", scheme: Scheme::SymplecticEuler, reference: Reference::Matrix,
-            printed: ["+0.958402", "-0.714922", "+0.177050", "-5.844307"] },
-        ExactRow { label: "backward Euler = linearly implicit w=1", scheme: Scheme::LinearlyImplicit { w: 1.0 },
-            reference: Reference::Matrix, printed: ["+0.148088", "+0.742274", "0", "0"] },
+            printed: ["+0.884260", "+1.767101", "-0.396619", "-1.162049"],
+        },
+        ExactRow {
+            label: "HHT alpha=-0.1",
+            scheme: Scheme::Hht { alpha: -0.1 },
+            reference: hht(-0.1),
+            printed: ["+0.960976", "+1.435213", "-0.641688", "+3.781674"],
+        },
+        ExactRow {
+            label: "HHT alpha=-0.3",
+            scheme: Scheme::Hht { alpha: -0.3 },
+            reference: hht(-0.3),
+            printed: ["+0.942739", "+1.653808", "-0.751774", "+1.720759"],
+        },
+        ExactRow {
+            label: "generalized-alpha rho_inf=0.5",
+            scheme: Scheme::GeneralizedAlpha { rho_inf: 0.5 },
+            reference: chung_hulbert(0.5),
+            printed: ["+0.942378", "+1.664414", "-0.752852", "+1.678584"],
+        },
+        ExactRow {
+            label: "explicit Euler",
+            scheme: Scheme::ExplicitEuler,
+            reference: Reference::Matrix,
+            printed: ["+4.126585", "+20.683999", "+1.5126e7", "+4.5962e7"],
+        },
+        ExactRow {
+            label: "Heun / improved Euler",
+            scheme: Scheme::ImprovedEuler,
+            reference: Reference::Matrix,
+            printed: ["+1.133532", "-2.670645", "-6.100030", "+18.320745"],
+        },
+        ExactRow { label: "RK4", scheme: Scheme::Rk4, reference: Reference::Matrix, printed: ["+0.995920", "+0.044066", "+0.957799", "+0.424487"] },
+        ExactRow {
+            label: "symplectic Euler (v first)",
+            scheme: Scheme::SymplecticEuler,
+            reference: Reference::Matrix,
+            printed: ["+0.958402", "-0.714922", "+0.177050", "-5.844307"],
+        },
+        ExactRow {
+            label: "backward Euler = linearly implicit w=1",
+            scheme: Scheme::LinearlyImplicit { w: 1.0 },
+            reference: Reference::Matrix,
+            printed: ["+0.148088", "+0.742274", "0", "0"],
+        },
         // Not in §8: w = 1/2 is the trapezoidal rule = Newmark average acceleration.
-        ExactRow { label: "linearly implicit w=1/2 (= Newmark avg)", scheme: Scheme::LinearlyImplicit { w: 0.5 },
-            reference: newmark(0.25, 0.5), printed: ["+0.980995", "+1.219131", "-0.372682", "+5.830540"] },
+        ExactRow {
+            label: "linearly implicit w=1/2 (= Newmark avg)",
+            scheme: Scheme::LinearlyImplicit { w: 0.5 },
+            reference: newmark(0.25, 0.5),
+            printed: ["+0.980995", "+1.219131", "-0.372682", "+5.830540"],
+        },
     ]
 }
 
@@ -260,17 +308,10 @@ fn section8_closed_forms_for_x_n() {
     // x_n = cos(n·2·asin(Ω/2)).
     let (omega, h) = (TAU, 0.1);
     let o = omega * h;
-    let cases = [
-        (Scheme::Newmark { beta: 0.25, gamma: 0.5 }, 2.0 * (o / 2.0).atan()),
-        (Scheme::Newmark { beta: 0.0, gamma: 0.5 }, 2.0 * (o / 2.0).asin()),
-    ];
+    let cases = [(Scheme::Newmark { beta: 0.25, gamma: 0.5 }, 2.0 * (o / 2.0).atan()), (Scheme::Newmark { beta: 0.0, gamma: 0.5 }, 2.0 * (o / 2.0).asin())];
     for (scheme, omega_bar) in cases {
         let got = run_oscillator(&scheme, omega, h, 1000);
-        let worst = got
-            .iter()
-            .enumerate()
-            .map(|(n, (x, _))| (x - ((n + 1) as f64 * omega_bar).cos()).abs())
-            .fold(0.0, f64::max);
+        let worst = got.iter().enumerate().map(|(n, (x, _))| (x - ((n + 1) as f64 * omega_bar).cos()).abs()).fold(0.0, f64::max);
         println!("{scheme}: max |x_n - cos(n Omega_bar)| over 1000 steps = {worst:.2e}");
         assert!(worst < 1e-12, "{scheme}: {worst:e}");
     }
@@ -319,9 +360,7 @@ fn eigenvalues(m: &[Vec<f64>]) -> Vec<Cx> {
         return quadratic(-tr, det);
     }
     let c2 = m[0][0] + m[1][1] + m[2][2];
-    let c1 = m[0][0] * m[1][1] - m[0][1] * m[1][0] + m[0][0] * m[2][2] - m[0][2] * m[2][0]
-        + m[1][1] * m[2][2]
-        - m[1][2] * m[2][1];
+    let c1 = m[0][0] * m[1][1] - m[0][1] * m[1][0] + m[0][0] * m[2][2] - m[0][2] * m[2][0] + m[1][1] * m[2][2] - m[1][2] * m[2][1];
     let c0 = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
     let p = |l: f64| ((l - c2) * l + c1) * l - c0;
@@ -329,7 +368,11 @@ fn eigenvalues(m: &[Vec<f64>]) -> Vec<Cx> {
     let (mut lo, mut hi) = (-bound, bound);
     for _ in 0..400 {
         let mid = 0.5 * (lo + hi);
-        if p(mid) < 0.0 { lo = mid } else { hi = mid }
+        if p(mid) < 0.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
     }
     let r = 0.5 * (lo + hi);
     let b = r - c2;
@@ -385,20 +428,10 @@ fn spectral(scheme: &Scheme, h_over_t: f64) -> Spectral {
     let (omega, h) = (TAU, h_over_t);
     let ev = eigenvalues(&amplification(scheme, omega, h));
     let rho = ev.iter().map(|e| e.abs()).fold(0.0, f64::max);
-    let principal = ev
-        .iter()
-        .filter(|e| e.im > 0.0)
-        .max_by(|a, b| a.abs().total_cmp(&b.abs()))
-        .copied()
-        .expect("complex principal pair");
+    let principal = ev.iter().filter(|e| e.im > 0.0).max_by(|a, b| a.abs().total_cmp(&b.abs())).copied().expect("complex principal pair");
     let omega_bar = principal.im.atan2(principal.re).abs();
     let o = omega * h;
-    Spectral {
-        rho,
-        pe: o / omega_bar - 1.0,
-        xi: -principal.abs().ln() / omega_bar,
-        amp_per_period: principal.abs().powf(1.0 / h_over_t),
-    }
+    Spectral { rho, pe: o / omega_bar - 1.0, xi: -principal.abs().ln() / omega_bar, amp_per_period: principal.abs().powf(1.0 / h_over_t) }
 }
 
 #[derive(Clone, Copy)]
@@ -505,8 +538,7 @@ fn section8_spectral_closed_forms() {
         close("backward Euler rho", spectral(&Scheme::LinearlyImplicit { w: 1.0 }, h_over_t).rho, 1.0 / (1.0 + o * o).sqrt());
     }
     let one_minus = 1.0 - spectral(&Scheme::Rk4, 0.01).rho;
-    println!("RK4 at h/T = 0.01: 1 - rho = {one_minus:.4e} (section 8 prints 5e-13; closed form Omega^6/144 = {:.4e})",
-        (TAU * 0.01f64).powi(6) / 144.0);
+    println!("RK4 at h/T = 0.01: 1 - rho = {one_minus:.4e} (section 8 prints 5e-13; closed form Omega^6/144 = {:.4e})", (TAU * 0.01f64).powi(6) / 144.0);
     assert!((one_minus - 4.27e-10).abs() < 0.01e-10);
 }
 
@@ -606,7 +638,10 @@ fn stability_limits_and_divergence_just_beyond() {
         let first = amps[..10].iter().copied().fold(0.0, f64::max);
         let last = amps[9_000..].iter().copied().fold(0.0, f64::max);
         let o2 = (TAU * h_over_t).powi(2);
-        println!("Wilson 1.4 at h = {h_over_t} T: overshoot {first:.4e} in the first 10 steps ((h omega)^2/7 = {:.4e}), max over the last 1000 steps {last:.2e}", o2 / 7.0);
+        println!(
+            "Wilson 1.4 at h = {h_over_t} T: overshoot {first:.4e} in the first 10 steps ((h omega)^2/7 = {:.4e}), max over the last 1000 steps {last:.2e}",
+            o2 / 7.0
+        );
         assert!(first < o2 && last < 1e-12, "Wilson must stay bounded and decay");
     }
     // Explicit and improved Euler grow for every h.
@@ -709,9 +744,7 @@ impl SecondOrderSystem for NoFrequency {
     fn residual(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError> {
         self.0.residual(t, q, v, a, r)
     }
-    fn solve_tangent(
-        &mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], c_v: f64, c_q: f64, b: &[f64], x: &mut [f64],
-    ) -> Result<(), SystemError> {
+    fn solve_tangent(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         self.0.solve_tangent(t, q, v, a, c_v, c_q, b, x)
     }
 }
@@ -762,9 +795,7 @@ fn pendulum_60_degrees_period_and_newton_iterations() {
     }
     let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
     let rel = period / t_exact - 1.0;
-    println!(
-        "pendulum 60 deg: exact period {t_exact:.9} s (small-amplitude {t_small:.6}), gen-alpha rho=0 h=T/2000: {period:.9} s, rel. error {rel:.2e}"
-    );
+    println!("pendulum 60 deg: exact period {t_exact:.9} s (small-amplitude {t_small:.6}), gen-alpha rho=0 h=T/2000: {period:.9} s, rel. error {rel:.2e}");
     assert!(rel.abs() < 1e-4);
     assert!(t_exact / t_small - 1.0 > 0.07, "the 60 deg period is 7 % longer than the linear one");
 
@@ -778,10 +809,7 @@ fn pendulum_60_degrees_period_and_newton_iterations() {
         assert_eq!(stats.substeps_used, 1);
         total += stats;
     }
-    println!(
-        "pendulum 60 deg at h = T/100: max {worst} Newton iterations per step, mean {:.2}",
-        total.newton_iterations as f64 / 1000.0
-    );
+    println!("pendulum 60 deg at h = T/100: max {worst} Newton iterations per step, mean {:.2}", total.newton_iterations as f64 / 1000.0);
     assert!(worst <= 4);
 }
 
@@ -796,9 +824,7 @@ impl SecondOrderSystem for StaleTangent {
     fn residual(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError> {
         self.0.residual(t, q, v, a, r)
     }
-    fn solve_tangent(
-        &mut self, _t: f64, _q: &[f64], _v: &[f64], _a: &[f64], _c_v: f64, _c_q: f64, b: &[f64], x: &mut [f64],
-    ) -> Result<(), SystemError> {
+    fn solve_tangent(&mut self, _t: f64, _q: &[f64], _v: &[f64], _a: &[f64], _c_v: f64, _c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         x[0] = self.1 * b[0];
         Ok(())
     }
@@ -870,9 +896,7 @@ impl Modal {
         let b = -(k[0][0] * m[1][1] + k[1][1] * m[0][0] - k[0][1] * m[1][0] - k[1][0] * m[0][1]);
         let c = det_k;
         let disc = (b * b - 4.0 * a * c).sqrt();
-        let mform = |x: [f64; 2], y: [f64; 2]| {
-            x[0] * (m[0][0] * y[0] + m[0][1] * y[1]) + x[1] * (m[1][0] * y[0] + m[1][1] * y[1])
-        };
+        let mform = |x: [f64; 2], y: [f64; 2]| x[0] * (m[0][0] * y[0] + m[0][1] * y[1]) + x[1] * (m[1][0] * y[0] + m[1][1] * y[1]);
         let u0 = [q0[0] - q_static[0], q0[1] - q_static[1]];
         let modes = [(-b - disc) / (2.0 * a), (-b + disc) / (2.0 * a)].map(|lambda| {
             let phi = [-(k[0][1] - lambda * m[0][1]), k[0][0] - lambda * m[0][0]];
@@ -908,10 +932,7 @@ fn damped_two_dof_matches_modal_solution() {
     let rows = |x: [[f64; 2]; 2]| x.iter().map(|r| r.to_vec()).collect::<Vec<_>>();
     // Max deviation from the modal solution over 10 s, sampled every 0.1 s.
     let error = |scheme: &Scheme, h: f64| {
-        let mut sys = DenseSystem::from_rows(&rows(m), &rows(c), &rows(k))
-            .expect("valid")
-            .with_force_vector(f.to_vec())
-            .expect("force");
+        let mut sys = DenseSystem::from_rows(&rows(m), &rows(c), &rows(k)).expect("valid").with_force_vector(f.to_vec()).expect("force");
         let mut state = State::new(&mut sys, 0.0, q0.to_vec(), v0.to_vec()).expect("state");
         let mut integ = Integrator::new(scheme.clone());
         let steps = (10.0 / h).round() as usize;

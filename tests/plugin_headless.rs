@@ -36,9 +36,7 @@ fn spawn_trolley(app: &mut App, big_m: f32, m: f32, l: f32, phi: f32, n: usize) 
         .id();
     let r = 0.05;
     let dir = Vec3::new(phi.sin(), -phi.cos(), 0.0);
-    let payload = w
-        .spawn((RigidBody::Dynamic, Transform::from_translation(dir * l), Collider::ball(r), ColliderMassProperties::Mass(m)))
-        .id();
+    let payload = w.spawn((RigidBody::Dynamic, Transform::from_translation(dir * l), Collider::ball(r), ColliderMassProperties::Mass(m))).id();
     let mut d = CableDescriptor::new(
         (l - r) as f64,
         n,
@@ -87,7 +85,8 @@ fn trolley_on_rapier_prismatic_joint_swings_at_coupled_frequency() {
         vs.push(v);
         worst_p = worst_p.max(p.abs());
     }
-    let ups: Vec<f64> = (1..vs.len()).filter(|&k| vs[k - 1] < 0.0 && vs[k] >= 0.0).map(|k| ts[k - 1] + DT as f64 * (-vs[k - 1]) / (vs[k] - vs[k - 1])).collect();
+    let ups: Vec<f64> =
+        (1..vs.len()).filter(|&k| vs[k - 1] < 0.0 && vs[k] >= 0.0).map(|k| ts[k - 1] + DT as f64 * (-vs[k - 1]) / (vs[k] - vs[k - 1])).collect();
     let period = (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64;
     let err = (period - t_ref) / t_ref;
     let v_scale = m as f64 * (2.0 * g * l as f64 * (1.0 - 2f64.to_radians().cos())).sqrt();
@@ -200,14 +199,11 @@ fn rapier_motor_drives_an_absorbed_trolley() {
     let a2 = target * r1 / (r2 - r1);
     let a1 = -target - a2;
     let exact = |t: f64| target + a1 * (w1 * t).cos() + a2 * (w2 * t).cos();
-    let mut lin = DenseSystem::from_rows(
-        &[vec![big_m + m, m * l], vec![m * l, m * l * l]],
-        &[vec![0.0, 0.0], vec![0.0, 0.0]],
-        &[vec![k, 0.0], vec![0.0, m * g * l]],
-    )
-    .unwrap()
-    .with_force_vector(vec![k * target, 0.0])
-    .unwrap();
+    let mut lin =
+        DenseSystem::from_rows(&[vec![big_m + m, m * l], vec![m * l, m * l * l]], &[vec![0.0, 0.0], vec![0.0, 0.0]], &[vec![k, 0.0], vec![0.0, m * g * l]])
+            .unwrap()
+            .with_force_vector(vec![k * target, 0.0])
+            .unwrap();
     let mut lin_state = State::new(&mut lin, 0.0, vec![0.0, 0.0], vec![0.0, 0.0]).unwrap();
     let mut integrator = Integrator::new(Scheme::default());
     let (mut worst_exact, mut worst_discrete): (f64, f64) = (0.0, 0.0);
@@ -241,11 +237,16 @@ fn mass_ratio_extremes_stay_stable_at_frame_step() {
         let w = app.world_mut();
         let top = w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, 20.0, 0.0))).id();
         let r = 0.2;
-        let payload = w
-            .spawn((RigidBody::Dynamic, Transform::from_xyz(3.0, 0.0 - r, 0.0), Collider::ball(r), ColliderMassProperties::Mass(payload_mass)))
-            .id();
+        let payload = w.spawn((RigidBody::Dynamic, Transform::from_xyz(3.0, 0.0 - r, 0.0), Collider::ball(r), ColliderMassProperties::Mass(payload_mass))).id();
         let l = (3.0f32 * 3.0 + 20.0 * 20.0).sqrt();
-        let mut d = CableDescriptor::new(l as f64, n, steel(2e7, mu), 0.02, CableAnchor::Body { entity: top, anchor: Vec3::ZERO, clamp: false }, CableAnchor::Body { entity: payload, anchor: Vec3::Y * r, clamp: false });
+        let mut d = CableDescriptor::new(
+            l as f64,
+            n,
+            steel(2e7, mu),
+            0.02,
+            CableAnchor::Body { entity: top, anchor: Vec3::ZERO, clamp: false },
+            CableAnchor::Body { entity: payload, anchor: Vec3::Y * r, clamp: false },
+        );
         d.path = Some(vec![Vec3::new(0.0, 20.0, 0.0), Vec3::new(3.0, 0.0, 0.0)]);
         let cable = w.spawn(d).id();
         // 10 s; mean top tension over the last 5 s (the payload was released
@@ -261,7 +262,11 @@ fn mass_ratio_extremes_stay_stable_at_frame_step() {
         let ratio = payload_mass as f64 / (mu * l as f64 / n as f64);
         let tension = sum / 300.0;
         let weight = (payload_mass as f64 + mu * l as f64) * 9.81;
-        println!("payload {payload_mass} kg ({ratio:.0}× an element): failed = {}, mean top tension {tension:.0} N (weight {weight:.0} N), stretched {:.4} m", sim.failed, sim.cable.stretched_length());
+        println!(
+            "payload {payload_mass} kg ({ratio:.0}× an element): failed = {}, mean top tension {tension:.0} N (weight {weight:.0} N), stretched {:.4} m",
+            sim.failed,
+            sim.cable.stretched_length()
+        );
         assert!(!sim.failed);
         assert!((tension - weight).abs() < 0.05 * weight, "mean top tension {tension} vs weight {weight}");
         let y = app.world().get::<Transform>(payload).unwrap().translation.y;
@@ -295,7 +300,14 @@ fn cable_follows_a_kinematic_body() {
     let tip = w.spawn((RigidBody::KinematicVelocityBased, Transform::from_xyz(0.0, 10.0, 0.0), Velocity::zero())).id();
     let payload = w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -0.2, 0.0), Collider::ball(0.2), ColliderMassProperties::Mass(200.0))).id();
     let cable = w
-        .spawn(CableDescriptor::new(10.0, 20, steel(2e7, 1.6), 0.02, CableAnchor::Body { entity: tip, anchor: Vec3::ZERO, clamp: false }, CableAnchor::Body { entity: payload, anchor: Vec3::Y * 0.2, clamp: false }))
+        .spawn(CableDescriptor::new(
+            10.0,
+            20,
+            steel(2e7, 1.6),
+            0.02,
+            CableAnchor::Body { entity: tip, anchor: Vec3::ZERO, clamp: false },
+            CableAnchor::Body { entity: payload, anchor: Vec3::Y * 0.2, clamp: false },
+        ))
         .id();
     for k in 0..180 {
         let speed = (k as f32 / 30.0).min(1.0);
@@ -329,7 +341,14 @@ fn rope_force_acts_on_a_body_rapier_keeps() {
     let body = w.spawn((RigidBody::Dynamic, Transform::default(), Collider::ball(0.1), ColliderMassProperties::Mass(m), Velocity::zero())).id();
     let anchor = w.spawn((RigidBody::Fixed, Transform::from_xyz(span, 0.0, 0.0))).id();
     let cable = w
-        .spawn(CableDescriptor::new(l0, 20, steel(ea, 0.01), 0.01, CableAnchor::Body { entity: body, anchor: Vec3::ZERO, clamp: false }, CableAnchor::Body { entity: anchor, anchor: Vec3::ZERO, clamp: false }))
+        .spawn(CableDescriptor::new(
+            l0,
+            20,
+            steel(ea, 0.01),
+            0.01,
+            CableAnchor::Body { entity: body, anchor: Vec3::ZERO, clamp: false },
+            CableAnchor::Body { entity: anchor, anchor: Vec3::ZERO, clamp: false },
+        ))
         .id();
     let k = ea / l0;
     let omega = (k / m as f64).sqrt();
@@ -349,7 +368,11 @@ fn rope_force_acts_on_a_body_rapier_keeps() {
     let sim = app.world().get::<CableSim>(cable).unwrap();
     let x = app.world().get::<Transform>(body).unwrap().translation.x as f64;
     let t = sim.cable.time();
-    println!("t = {t:.3} s: body x = {x:.5} m (δ(1 − cos ωt) = {:.5}), rope start x = {:.5}; worst velocity error {worst:.2e} of δω", delta * (1.0 - (omega * t).cos()), sim.cable.nodes()[0].x);
+    println!(
+        "t = {t:.3} s: body x = {x:.5} m (δ(1 − cos ωt) = {:.5}), rope start x = {:.5}; worst velocity error {worst:.2e} of δω",
+        delta * (1.0 - (omega * t).cos()),
+        sim.cable.nodes()[0].x
+    );
     assert!(!sim.failed);
     // Explicit exchange lags one step: a phase error of about ωh.
     let h = DT as f64;

@@ -25,10 +25,7 @@ fn run(src: &str) -> (World, Vec<Vec<f64>>) {
 
 /// Times of upward zero crossings of column `col`, linearly interpolated.
 fn upward_crossings(rows: &[Vec<f64>], col: usize) -> Vec<f64> {
-    rows.windows(2)
-        .filter(|w| w[0][col] < 0.0 && w[1][col] >= 0.0)
-        .map(|w| w[0][0] + (w[1][0] - w[0][0]) * (-w[0][col]) / (w[1][col] - w[0][col]))
-        .collect()
+    rows.windows(2).filter(|w| w[0][col] < 0.0 && w[1][col] >= 0.0).map(|w| w[0][0] + (w[1][0] - w[0][0]) * (-w[0][col]) / (w[1][col] - w[0][col])).collect()
 }
 
 const G: f64 = 9.81;
@@ -85,7 +82,14 @@ quantity = "energy"
     }
     let last = rows.last().unwrap();
     let continuous = 10.0 - G / 2.0;
-    println!("y(1 s) = {:.6} m, discrete {:.6}, continuous {continuous:.6}; worst |Δpos| {:.2e} m, |Δv| {:.2e} m/s, |ΔE| {:.2e} J", last[2], 10.0 - G * h * h * 240.0 * 241.0 / 2.0, worst.0, worst.1, worst.2);
+    println!(
+        "y(1 s) = {:.6} m, discrete {:.6}, continuous {continuous:.6}; worst |Δpos| {:.2e} m, |Δv| {:.2e} m/s, |ΔE| {:.2e} J",
+        last[2],
+        10.0 - G * h * h * 240.0 * 241.0 / 2.0,
+        worst.0,
+        worst.1,
+        worst.2
+    );
     assert!(worst.0 < 2e-5, "position off the discrete formula by {:.3e} m", worst.0);
     assert!(worst.1 < 2e-5, "velocity off by {:.3e} m/s", worst.1);
     assert!(worst.2 < 1e-3, "energy probe off by {:.3e} J", worst.2);
@@ -240,7 +244,10 @@ s = 0.0
         dt = dt.max((r[5] - t_ref).abs());
     }
     println!("warnings: {:?}", world.warnings);
-    println!("payload y ref {y_ref:.6} m (δ = {:.3} mm): worst |Δy| {dy:.2e} m; block drift {dblock:.2e} m; top tension ref {t_ref:.3} N, worst |ΔT| {dt:.3} N", delta * 1e3);
+    println!(
+        "payload y ref {y_ref:.6} m (δ = {:.3} mm): worst |Δy| {dy:.2e} m; block drift {dblock:.2e} m; top tension ref {t_ref:.3} N, worst |ΔT| {dt:.3} N",
+        delta * 1e3
+    );
     assert!(dblock < 1e-3, "the block drifted {dblock} m");
     assert!(dy < 1e-3, "payload off by {dy} m");
     assert!(dt < 0.01 * t_ref, "top tension off by {dt} N");
@@ -410,7 +417,13 @@ quantity = "force"
     let at = |t: f64| rows.iter().find(|r| r[0] >= t - 1e-9).unwrap();
     let r1 = at(1.0);
     let w_ref = 2.0f64.to_degrees();
-    println!("t = 1 s: rate {:.4} deg/s vs {w_ref:.4}; torque {:?}; t = 5 s: rate {:.4}, torque {:?}", r1[1], &r1[2..5], rows.last().unwrap()[1], &rows.last().unwrap()[2..5]);
+    println!(
+        "t = 1 s: rate {:.4} deg/s vs {w_ref:.4}; torque {:?}; t = 5 s: rate {:.4}, torque {:?}",
+        r1[1],
+        &r1[2..5],
+        rows.last().unwrap()[1],
+        &rows.last().unwrap()[2..5]
+    );
     assert!((r1[1] / w_ref - 1.0).abs() < 5e-3, "rate {} vs {w_ref}", r1[1]);
     assert!((r1[3] - 5.0).abs() < 0.05 && r1[2].abs() < 1e-6 && r1[4].abs() < 1e-6, "torque {:?}", &r1[2..5]);
     let last = rows.last().unwrap();

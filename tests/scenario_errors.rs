@@ -2,10 +2,7 @@
 //! line, column and message; a complete file parses with the right values;
 //! random corruption never panics.
 
-use bevy_rapier_cable::scenario::{
-    parse, BodyKind, CableEnd, CableSide, Component, Drive, JointKind, Motion, ProbeTarget,
-    Quantity, ScenarioError, Shape,
-};
+use bevy_rapier_cable::scenario::{parse, BodyKind, CableEnd, CableSide, Component, Drive, JointKind, Motion, ProbeTarget, Quantity, ScenarioError, Shape};
 use glam::{DQuat, DVec3, EulerRot};
 
 /// A small valid file; tests break one line of it. Line numbers:
@@ -47,10 +44,7 @@ fn check(src: &str, line: usize, col: usize, phrase: &str) -> ScenarioError {
     let e = err(src);
     let shown = e.to_string();
     assert_eq!((e.line, e.col), (line, col), "wrong position:\n{shown}");
-    assert!(
-        e.message.contains(phrase),
-        "message lacks {phrase:?}:\n{shown}"
-    );
+    assert!(e.message.contains(phrase), "message lacks {phrase:?}:\n{shown}");
     assert!(shown.contains(&format!("bad.toml:{line}:{col}")), "{shown}");
     e
 }
@@ -63,222 +57,98 @@ fn replace(from: &str, to: &str) -> String {
 #[test]
 fn base_is_valid() {
     let s = parse(BASE, "base.toml").unwrap();
-    assert_eq!(
-        s.cables[0].path,
-        vec![DVec3::ZERO, DVec3::new(0.0, -5.0, 0.0)]
-    );
+    assert_eq!(s.cables[0].path, vec![DVec3::ZERO, DVec3::new(0.0, -5.0, 0.0)]);
 }
 
 #[test]
 fn negative_or_zero_length() {
-    check(
-        &replace("length = 5", "length = -2"),
-        15,
-        10,
-        "`length` must be greater than 0 m, found -2",
-    );
-    check(
-        &replace("length = 5", "length = 0"),
-        15,
-        10,
-        "`length` must be greater than 0",
-    );
+    check(&replace("length = 5", "length = -2"), 15, 10, "`length` must be greater than 0 m, found -2");
+    check(&replace("length = 5", "length = 0"), 15, 10, "`length` must be greater than 0");
 }
 
 #[test]
 fn zero_segments() {
-    let e = check(
-        &replace("segments = 10", "segments = 0"),
-        16,
-        12,
-        "`segments` must be at least 1",
-    );
-    assert!(
-        e.to_string()
-            .contains("16 | segments = 0\n   |            ^"),
-        "{e}"
-    );
+    let e = check(&replace("segments = 10", "segments = 0"), 16, 12, "`segments` must be at least 1");
+    assert!(e.to_string().contains("16 | segments = 0\n   |            ^"), "{e}");
 }
 
 #[test]
 fn nan_value() {
-    check(
-        &replace("ea = 1e6", "ea = nan"),
-        19,
-        6,
-        "`ea` must be a finite number, found NaN",
-    );
+    check(&replace("ea = 1e6", "ea = nan"), 19, 6, "`ea` must be a finite number, found NaN");
 }
 
 #[test]
 fn infinite_value() {
-    check(
-        &replace("diameter = 0.01", "diameter = inf"),
-        17,
-        12,
-        "`diameter` must be a finite number",
-    );
-    check(
-        &replace("[0, -5, 0]", "[0, -inf, 0]"),
-        11,
-        16,
-        "`position` must be a finite number",
-    );
+    check(&replace("diameter = 0.01", "diameter = inf"), 17, 12, "`diameter` must be a finite number");
+    check(&replace("[0, -5, 0]", "[0, -inf, 0]"), 11, 16, "`position` must be a finite number");
 }
 
 #[test]
 fn unknown_body_name() {
-    check(
-        &replace(r#"body = "hook""#, r#"body = "hok""#),
-        23,
-        16,
-        "unknown body `hok` (known bodies: `hook`",
-    );
+    check(&replace(r#"body = "hook""#, r#"body = "hok""#), 23, 16, "unknown body `hok` (known bodies: `hook`");
 }
 
 #[test]
 fn path_end_does_not_match_attachment() {
     let src = format!("{BASE}path = [[0, 0, 0], [0, -4, 0]]\n");
-    let e = check(
-        &src,
-        24,
-        20,
-        "does not coincide with the `end` attachment point",
-    );
-    assert!(
-        e.message.contains("[0, -4, 0]") && e.message.contains("[0, -5, 0]"),
-        "{e}"
-    );
+    let e = check(&src, 24, 20, "does not coincide with the `end` attachment point");
+    assert!(e.message.contains("[0, -4, 0]") && e.message.contains("[0, -5, 0]"), "{e}");
     let src = format!("{BASE}path = [[0, 0.5, 0], [0, -5, 0]]\n");
     let e = check(&src, 24, 9, "the first point of `path` [0, 0.5, 0]");
-    assert!(
-        e.message.contains("`start` attachment point [0, 0, 0]"),
-        "{e}"
-    );
+    assert!(e.message.contains("`start` attachment point [0, 0, 0]"), "{e}");
 }
 
 #[test]
 fn unknown_integrator_lists_valid_names() {
-    let e = check(
-        &replace("dt = 0.01\n", "dt = 0.01\nintegrator = \"rk5\"\n"),
-        4,
-        14,
-        "unknown integrator `rk5`",
-    );
-    for name in [
-        "euler",
-        "rk4",
-        "newmark",
-        "wilson_theta",
-        "hht",
-        "generalized_alpha",
-        "linearly_implicit",
-    ] {
+    let e = check(&replace("dt = 0.01\n", "dt = 0.01\nintegrator = \"rk5\"\n"), 4, 14, "unknown integrator `rk5`");
+    for name in ["euler", "rk4", "newmark", "wilson_theta", "hht", "generalized_alpha", "linearly_implicit"] {
         assert!(e.message.contains(&format!("`{name}`")), "{e}");
     }
 }
 
 #[test]
 fn integrator_parameter_out_of_range() {
-    let src = replace(
-        "dt = 0.01\n",
-        "dt = 0.01\nintegrator = \"generalized_alpha\"\nrho_inf = 1.5\n",
-    );
+    let src = replace("dt = 0.01\n", "dt = 0.01\nintegrator = \"generalized_alpha\"\nrho_inf = 1.5\n");
     check(&src, 5, 11, "`rho_inf` must be between 0 and 1, found 1.5");
-    let src = replace(
-        "dt = 0.01\n",
-        "dt = 0.01\nintegrator = \"hht\"\nalpha = 0.1\n",
-    );
+    let src = replace("dt = 0.01\n", "dt = 0.01\nintegrator = \"hht\"\nalpha = 0.1\n");
     check(&src, 5, 9, "`alpha` must be between -0.333333 and 0");
-    let src = replace(
-        "dt = 0.01\n",
-        "dt = 0.01\nintegrator = \"newmark\"\ngamma = 0.4\n",
-    );
+    let src = replace("dt = 0.01\n", "dt = 0.01\nintegrator = \"newmark\"\ngamma = 0.4\n");
     check(&src, 5, 9, "`gamma` must be at least 0.5");
     // A parameter of another scheme is not silently ignored.
-    let src = replace(
-        "dt = 0.01\n",
-        "dt = 0.01\nintegrator = \"newmark\"\ntheta = 1.4\n",
-    );
-    check(
-        &src,
-        5,
-        9,
-        "`theta` is a parameter of the `wilson_theta` integrator",
-    );
+    let src = replace("dt = 0.01\n", "dt = 0.01\nintegrator = \"newmark\"\ntheta = 1.4\n");
+    check(&src, 5, 9, "`theta` is a parameter of the `wilson_theta` integrator");
 }
 
 #[test]
 fn misspelt_field() {
-    check(
-        &replace("length = 5", "lenght = 5"),
-        15,
-        1,
-        "unknown field `lenght`",
-    );
-    check(
-        &replace("[[cable]]", "[[cables]]"),
-        13,
-        3,
-        "unknown field `cables`",
-    );
-    check(
-        &replace("{ world = [0, 0, 0] }", "{ wrold = [0, 0, 0] }"),
-        22,
-        11,
-        "unknown field `wrold`",
-    );
+    check(&replace("length = 5", "lenght = 5"), 15, 1, "unknown field `lenght`");
+    check(&replace("[[cable]]", "[[cables]]"), 13, 3, "unknown field `cables`");
+    check(&replace("{ world = [0, 0, 0] }", "{ wrold = [0, 0, 0] }"), 22, 11, "unknown field `wrold`");
 }
 
 #[test]
 fn wrong_type() {
-    check(
-        &replace("mass = 10", "mass = \"heavy\""),
-        10,
-        8,
-        "invalid type: string \"heavy\", expected f64",
-    );
-    check(
-        &replace("segments = 10", "segments = 2.5"),
-        16,
-        12,
-        "invalid type: floating point",
-    );
+    check(&replace("mass = 10", "mass = \"heavy\""), 10, 8, "invalid type: string \"heavy\", expected f64");
+    check(&replace("segments = 10", "segments = 2.5"), 16, 12, "invalid type: floating point");
 }
 
 #[test]
 fn unit_mismatch() {
     // A quaternion where XYZ Euler degrees are expected.
-    let src = replace(
-        "position = [0, -5, 0]\n",
-        "position = [0, -5, 0]\nrotation = [0, 0, 0, 1]\n",
-    );
-    check(
-        &src,
-        12,
-        12,
-        "`rotation` must have 3 components [x, y, z] (degrees), found 4",
-    );
+    let src = replace("position = [0, -5, 0]\n", "position = [0, -5, 0]\nrotation = [0, 0, 0, 1]\n");
+    check(&src, 12, 12, "`rotation` must have 3 components [x, y, z] (degrees), found 4");
     // A velocity table point that is not [t, v].
     let joint = "\n[[joint]]\nname = \"j\"\ntype = \"prismatic\"\nbody1 = \"world\"\nbody2 = \"hook\"\naxis = [0, 1, 0]\ndrive = { velocity = [[0, 0], [1, 0.5, 2]], max_force = 100 }\n";
     let src = format!("{BASE}{joint}");
-    check(
-        &src,
-        31,
-        31,
-        "`velocity` must be a list of points [[t, v], ...] (s, m/s); point 2 has 3 elements",
-    );
+    check(&src, 31, 31, "`velocity` must be a list of points [[t, v], ...] (s, m/s); point 2 has 3 elements");
 }
 
 #[test]
 fn duplicate_names() {
-    let src = format!("{BASE}\n[[cable]]\nname = \"rope\"\nlength = 1\nsegments = 1\ndiameter = 0.01\nmaterial = \"fibre_rope_polyester\"\nstart = {{ world = [1, 0, 0] }}\n");
-    check(
-        &src,
-        26,
-        8,
-        "duplicate cable name `rope` (first defined at line 14)",
+    let src = format!(
+        "{BASE}\n[[cable]]\nname = \"rope\"\nlength = 1\nsegments = 1\ndiameter = 0.01\nmaterial = \"fibre_rope_polyester\"\nstart = {{ world = [1, 0, 0] }}\n"
     );
+    check(&src, 26, 8, "duplicate cable name `rope` (first defined at line 14)");
 }
 
 #[test]
@@ -291,60 +161,26 @@ fn probe_with_two_targets() {
 
 #[test]
 fn probe_quantity_invalid_for_target() {
-    let src =
-        format!("{BASE}\n[[probe]]\nname = \"p\"\ncable = \"rope\"\nquantity = \"rotation\"\n");
-    let e = check(
-        &src,
-        28,
-        12,
-        "quantity `rotation` is not available for a cable probe",
-    );
-    assert!(
-        e.message.contains("`tension`") && e.message.contains("`contact_force`"),
-        "{e}"
-    );
+    let src = format!("{BASE}\n[[probe]]\nname = \"p\"\ncable = \"rope\"\nquantity = \"rotation\"\n");
+    let e = check(&src, 28, 12, "quantity `rotation` is not available for a cable probe");
+    assert!(e.message.contains("`tension`") && e.message.contains("`contact_force`"), "{e}");
 }
 
 #[test]
 fn world_is_not_a_body_name() {
-    check(
-        &replace("name = \"hook\"", "name = \"world\""),
-        6,
-        8,
-        "`world` is reserved",
-    );
+    check(&replace("name = \"hook\"", "name = \"world\""), 6, 8, "`world` is reserved");
 }
 
 #[test]
 fn toml_syntax_error() {
-    check(
-        &replace("[[cable]]", "[[cable]"),
-        13,
-        9,
-        "TOML syntax error",
-    );
-    check(
-        &replace("ea = 1e6", "ea = 1e6 2"),
-        19,
-        6,
-        "TOML syntax error",
-    );
+    check(&replace("[[cable]]", "[[cable]"), 13, 9, "TOML syntax error");
+    check(&replace("ea = 1e6", "ea = 1e6 2"), 19, 6, "TOML syntax error");
 }
 
 #[test]
 fn missing_material_or_field() {
-    check(
-        &replace("ei = 1\n", ""),
-        13,
-        1,
-        "missing field `ei` (give it, or a `material` preset)",
-    );
-    let e = check(
-        &replace("linear_density = 0.5", "material = \"unobtainium\""),
-        18,
-        12,
-        "unknown material `unobtainium`",
-    );
+    check(&replace("ei = 1\n", ""), 13, 1, "missing field `ei` (give it, or a `material` preset)");
+    let e = check(&replace("linear_density = 0.5", "material = \"unobtainium\""), 18, 12, "unknown material `unobtainium`");
     assert!(e.message.contains("`steel_wire_rope_6x36_iwrc`"), "{e}");
 }
 
@@ -369,65 +205,26 @@ fn docs_example() -> &'static str {
 fn docs_example_parses_with_every_field() {
     let s = parse(docs_example(), "scenario.md").unwrap_or_else(|e| panic!("{e}"));
     let sim = &s.simulation;
-    assert_eq!(
-        (sim.duration, sim.substeps, sim.output_interval),
-        (20.0, Some(2), 0.05)
-    );
+    assert_eq!((sim.duration, sim.substeps, sim.output_interval), (20.0, Some(2), 0.05));
     approx::assert_relative_eq!(sim.dt, 1.0 / 60.0);
     assert_eq!(sim.gravity, DVec3::new(0.0, -9.81, 0.0));
-    assert_eq!(
-        (sim.integrator.name.as_str(), sim.integrator.rho_inf),
-        ("generalized_alpha", Some(0.0))
-    );
+    assert_eq!((sim.integrator.name.as_str(), sim.integrator.rho_inf), ("generalized_alpha", Some(0.0)));
 
     let env = &s.environment;
-    assert_eq!(
-        (env.air_density, env.water_surface, env.water_density),
-        (1.225, Some(-2.0), 1025.0)
-    );
-    assert_eq!(
-        (env.wind, env.current),
-        (DVec3::new(8.0, 0.0, 0.0), DVec3::new(0.3, 0.0, 0.0))
-    );
+    assert_eq!((env.air_density, env.water_surface, env.water_density), (1.225, Some(-2.0), 1025.0));
+    assert_eq!((env.wind, env.current), (DVec3::new(8.0, 0.0, 0.0), DVec3::new(0.3, 0.0, 0.0)));
 
     let quay = s.body("quay").unwrap();
-    assert_eq!(
-        (quay.kind, quay.mass, quay.friction),
-        (BodyKind::Fixed, None, 0.6)
-    );
-    assert_eq!(
-        quay.shape,
-        Shape::Cuboid {
-            half_extents: DVec3::new(20.0, 1.0, 20.0)
-        }
-    );
+    assert_eq!((quay.kind, quay.mass, quay.friction), (BodyKind::Fixed, None, 0.6));
+    assert_eq!(quay.shape, Shape::Cuboid { half_extents: DVec3::new(20.0, 1.0, 20.0) });
     assert!(quay.location.line > 1 && quay.location.col == 1);
     let jib = s.body("jib").unwrap();
-    assert_eq!(
-        jib.shape,
-        Shape::Capsule {
-            radius: 0.3,
-            half_height: 8.0
-        }
-    );
+    assert_eq!(jib.shape, Shape::Capsule { radius: 0.3, half_height: 8.0 });
     // Rz(90°) turns the capsule axis (local y) to world -x.
-    assert!(jib
-        .rotation
-        .mul_vec3(DVec3::Y)
-        .abs_diff_eq(-DVec3::X, 1e-12));
+    assert!(jib.rotation.mul_vec3(DVec3::Y).abs_diff_eq(-DVec3::X, 1e-12));
     let trolley = s.body("trolley").unwrap();
-    let Some(Motion::Sine {
-        amplitude,
-        period,
-        phase,
-    }) = trolley.motion.clone()
-    else {
-        panic!()
-    };
-    assert_eq!(
-        (amplitude, period, phase),
-        (DVec3::new(2.0, 0.0, 0.0), 12.0, 0.0)
-    );
+    let Some(Motion::Sine { amplitude, period, phase }) = trolley.motion.clone() else { panic!() };
+    assert_eq!((amplitude, period, phase), (DVec3::new(2.0, 0.0, 0.0), 12.0, 0.0));
     approx::assert_relative_eq!(trolley.position_at(3.0).x, 14.0);
     let v = trolley.motion.as_ref().unwrap().velocity_at(0.0);
     approx::assert_relative_eq!(v.x, 2.0 * std::f64::consts::TAU / 12.0);
@@ -435,119 +232,50 @@ fn docs_example_parses_with_every_field() {
     assert_eq!(barge.position, DVec3::new(14.0, -2.0, 0.0));
     let m = barge.motion.as_ref().unwrap();
     assert_eq!(m.position_at(5.0, DVec3::ZERO), DVec3::new(14.0, -2.0, 1.5));
-    assert_eq!(
-        m.position_at(99.0, DVec3::ZERO),
-        DVec3::new(16.0, -2.0, 3.0)
-    );
+    assert_eq!(m.position_at(99.0, DVec3::ZERO), DVec3::new(16.0, -2.0, 3.0));
     assert_eq!(m.velocity_at(15.0), DVec3::new(0.2, 0.0, 0.0));
     assert_eq!(m.velocity_at(25.0), DVec3::ZERO);
     let hook = s.body("hook").unwrap();
     assert_eq!((hook.kind, hook.mass), (BodyKind::Dynamic, Some(500.0)));
-    assert_eq!(
-        hook.shape,
-        Shape::Cylinder {
-            radius: 0.35,
-            half_height: 0.4
-        }
-    );
+    assert_eq!(hook.shape, Shape::Cylinder { radius: 0.35, half_height: 0.4 });
     let q = DQuat::from_euler(EulerRot::XYZ, 0.0, 90f64.to_radians(), 0.0);
     assert!(hook.rotation.dot(q) > 1.0 - 1e-12);
     assert_eq!(hook.linear_velocity, DVec3::new(0.5, 0.0, 0.0));
     approx::assert_relative_eq!(hook.angular_velocity.y, 10f64.to_radians());
-    assert_eq!(
-        (hook.wind_area, hook.wind_coefficient, hook.friction),
-        (0.6, 1.2, 0.4)
-    );
-    assert_eq!(
-        s.body("shackle").unwrap().shape,
-        Shape::Ball { radius: 0.1 }
-    );
+    assert_eq!((hook.wind_area, hook.wind_coefficient, hook.friction), (0.6, 1.2, 0.4));
+    assert_eq!(s.body("shackle").unwrap().shape, Shape::Ball { radius: 0.1 });
 
     let slew = &s.joints[0];
-    assert_eq!(
-        (slew.kind, slew.body1.as_str(), slew.body2.as_str()),
-        (JointKind::Revolute, "world", "jib")
-    );
-    assert_eq!(
-        (slew.anchor1, slew.axis),
-        (DVec3::new(0.0, 30.0, 0.0), Some(DVec3::Y))
-    );
+    assert_eq!((slew.kind, slew.body1.as_str(), slew.body2.as_str()), (JointKind::Revolute, "world", "jib"));
+    assert_eq!((slew.anchor1, slew.axis), (DVec3::new(0.0, 30.0, 0.0), Some(DVec3::Y)));
     let lim = slew.limits.unwrap();
     approx::assert_relative_eq!(lim[0], -std::f64::consts::FRAC_PI_4);
-    let Some(Drive::Velocity {
-        velocity,
-        max_force,
-    }) = &slew.drive
-    else {
-        panic!()
-    };
+    let Some(Drive::Velocity { velocity, max_force }) = &slew.drive else { panic!() };
     assert_eq!(*max_force, 2e6);
     approx::assert_relative_eq!(velocity.value_at(2.5), 1.5f64.to_radians());
     approx::assert_relative_eq!(velocity.value_at(99.0), 0.0);
     let balance = &s.joints[1];
-    assert_eq!(
-        (balance.kind, balance.limits),
-        (JointKind::Prismatic, Some([-1.0, 4.0]))
-    );
-    let Some(Drive::Force { force }) = &balance.drive else {
-        panic!()
-    };
-    assert_eq!(
-        (
-            force.value_at(-1.0),
-            force.value_at(1.0),
-            force.value_at(9.0)
-        ),
-        (0.0, 2500.0, 5000.0)
-    );
-    assert_eq!(
-        (s.joints[2].kind, s.joints[2].axis),
-        (JointKind::Spherical, None)
-    );
+    assert_eq!((balance.kind, balance.limits), (JointKind::Prismatic, Some([-1.0, 4.0])));
+    let Some(Drive::Force { force }) = &balance.drive else { panic!() };
+    assert_eq!((force.value_at(-1.0), force.value_at(1.0), force.value_at(9.0)), (0.0, 2500.0, 5000.0));
+    assert_eq!((s.joints[2].kind, s.joints[2].axis), (JointKind::Spherical, None));
     assert_eq!(s.joints[3].kind, JointKind::Fixed);
 
     let hoist = s.cable("hoist").unwrap();
     let steel = bevy_rapier_cable::cable::preset("steel_wire_rope_6x36_iwrc", 0.02).unwrap();
-    assert_eq!(
-        (hoist.length, hoist.segments, hoist.diameter),
-        (18.8, 40, 0.02)
-    );
-    assert_eq!(
-        (hoist.linear_density, hoist.ea, hoist.gj),
-        (steel.linear_density, steel.ea, steel.gj)
-    );
-    assert_eq!(
-        (hoist.ei, hoist.ei2, hoist.shear_stiffness),
-        (40.0, 45.0, Some(1e8))
-    );
-    assert_eq!(
-        (
-            hoist.damping,
-            hoist.friction,
-            hoist.drag_normal,
-            hoist.drag_tangential,
-            hoist.added_mass
-        ),
-        (0.002, 0.2, 1.1, 0.01, 0.9)
-    );
+    assert_eq!((hoist.length, hoist.segments, hoist.diameter), (18.8, 40, 0.02));
+    assert_eq!((hoist.linear_density, hoist.ea, hoist.gj), (steel.linear_density, steel.ea, steel.gj));
+    assert_eq!((hoist.ei, hoist.ei2, hoist.shear_stiffness), (40.0, 45.0, Some(1e8)));
+    assert_eq!((hoist.damping, hoist.friction, hoist.drag_normal, hoist.drag_tangential, hoist.added_mass), (0.002, 0.2, 1.1, 0.01, 0.9));
     assert_eq!(hoist.material.as_deref(), Some("steel_wire_rope_6x36_iwrc"));
     // Default path: the trolley point to the hook point.
-    assert_eq!(
-        hoist.path,
-        vec![DVec3::new(12.0, 29.2, 0.0), DVec3::new(12.0, 10.4, 0.0)]
-    );
+    assert_eq!(hoist.path, vec![DVec3::new(12.0, 29.2, 0.0), DVec3::new(12.0, 10.4, 0.0)]);
     approx::assert_relative_eq!(hoist.path_length(), hoist.length, epsilon = 1e-9);
     assert!(matches!(&hoist.end, CableEnd::Body { body, clamp: true, .. } if body == "hook"));
     assert!(hoist.contacts);
     let tag = s.cable("tagline").unwrap();
-    assert_eq!(
-        (tag.linear_density, tag.ea, tag.ei, tag.ei2, tag.gj),
-        (0.09, 1.2e6, 0.02, 0.02, 0.01)
-    );
-    assert_eq!(
-        (&tag.end, tag.path.len(), tag.contacts),
-        (&CableEnd::Free, 3, false)
-    );
+    assert_eq!((tag.linear_density, tag.ea, tag.ei, tag.ei2, tag.gj), (0.09, 1.2e6, 0.02, 0.02, 0.01));
+    assert_eq!((&tag.end, tag.path.len(), tag.contacts), (&CableEnd::Free, 3, false));
     // Extensions: point loads, stress-free shape, static start, spin.
     assert_eq!(tag.loads.len(), 2);
     assert_eq!((tag.loads[0].s, tag.loads[0].force, tag.loads[0].moment), (6.0, DVec3::new(0.0, -50.0, 0.0), DVec3::ZERO));
@@ -561,40 +289,19 @@ fn docs_example_parses_with_every_field() {
     let hose = s.cable("hose").unwrap();
     assert!(hose.stress_free);
     assert_eq!(hose.start, CableEnd::Free);
-    assert_eq!(
-        hose.end,
-        CableEnd::World {
-            point: DVec3::new(-5.0, 4.0, 0.0),
-            clamp: true
-        }
-    );
+    assert_eq!(hose.end, CableEnd::World { point: DVec3::new(-5.0, 4.0, 0.0), clamp: true });
     let fibre = bevy_rapier_cable::cable::preset("fibre_rope_polyester", 0.1).unwrap();
     assert_eq!((hose.linear_density, hose.ea), (6.0, fibre.ea));
 
     let w = &s.winches[0];
-    assert_eq!(
-        (w.cable.as_str(), w.at, w.brake),
-        ("hoist", CableSide::Start, true)
-    );
-    assert_eq!(
-        (w.drum_radius, w.drum_inertia, w.max_torque),
-        (0.4, 25.0, 3e4)
-    );
-    assert_eq!(
-        (w.min_length, w.max_length, w.speed.value_at(3.0)),
-        (Some(2.0), Some(28.0), -0.25)
-    );
+    assert_eq!((w.cable.as_str(), w.at, w.brake), ("hoist", CableSide::Start, true));
+    assert_eq!((w.drum_radius, w.drum_inertia, w.max_torque), (0.4, 25.0, 3e4));
+    assert_eq!((w.min_length, w.max_length, w.speed.value_at(3.0)), (Some(2.0), Some(28.0), -0.25));
 
     assert_eq!(s.probes[1].component, Some(Component::Y));
     assert_eq!(s.probes[2].target, ProbeTarget::Cable("hoist".into()));
-    assert_eq!(
-        (s.probes[2].quantity, s.probes[2].s),
-        (Quantity::Tension, Some(0.25))
-    );
-    assert_eq!(
-        (s.probes[5].quantity, s.probes[5].component),
-        (Quantity::Force, Some(Component::Norm))
-    );
+    assert_eq!((s.probes[2].quantity, s.probes[2].s), (Quantity::Tension, Some(0.25)));
+    assert_eq!((s.probes[5].quantity, s.probes[5].component), (Quantity::Force, Some(Component::Norm)));
     assert_eq!(s.probes[8].target, ProbeTarget::System);
     let expected = [
         "hook.x",
@@ -611,16 +318,8 @@ fn docs_example_parses_with_every_field() {
     ];
     assert_eq!(s.columns(), expected);
     // The column list at the end of the page matches.
-    let listed = include_str!("../docs/scenario.md")
-        .split("writes the columns `")
-        .nth(1)
-        .unwrap_or("");
-    let listed: String = listed
-        .split('`')
-        .next()
-        .unwrap_or("")
-        .split_whitespace()
-        .collect();
+    let listed = include_str!("../docs/scenario.md").split("writes the columns `").nth(1).unwrap_or("");
+    let listed: String = listed.split('`').next().unwrap_or("").split_whitespace().collect();
     assert_eq!(listed, format!("time,{}", expected.join(",")));
 }
 
@@ -639,14 +338,8 @@ fn every_integrator_and_parameter_is_accepted() {
         ("linearly_implicit", "w = 0.55"),
     ];
     for (name, params) in cases {
-        let src = replace(
-            "dt = 0.01\n",
-            &format!("dt = 0.01\nintegrator = \"{name}\"\n{params}\n"),
-        );
-        let i = parse(&src, "i.toml")
-            .unwrap_or_else(|e| panic!("{e}"))
-            .simulation
-            .integrator;
+        let src = replace("dt = 0.01\n", &format!("dt = 0.01\nintegrator = \"{name}\"\n{params}\n"));
+        let i = parse(&src, "i.toml").unwrap_or_else(|e| panic!("{e}")).simulation.integrator;
         assert_eq!(i.name, *name);
         let given = [i.beta, i.gamma, i.theta, i.alpha, i.rho_inf, i.w];
         let expected = match *name {
@@ -665,77 +358,30 @@ fn every_integrator_and_parameter_is_accepted() {
 fn defaults_are_right() {
     let s = parse(BASE, "base.toml").unwrap();
     let sim = &s.simulation;
-    assert_eq!(
-        (sim.substeps, sim.output_interval, sim.gravity),
-        (None, 0.01, DVec3::new(0.0, -9.81, 0.0))
-    );
+    assert_eq!((sim.substeps, sim.output_interval, sim.gravity), (None, 0.01, DVec3::new(0.0, -9.81, 0.0)));
     assert_eq!(sim.integrator.name, "generalized_alpha");
     assert_eq!(sim.integrator.rho_inf, Some(0.0));
     assert_eq!((sim.statics, sim.static_load_steps), (false, 10));
     assert!(s.cables[0].loads.is_empty() && !s.cables[0].stress_free);
     let env = &s.environment;
-    assert_eq!(
-        (
-            env.air_density,
-            env.wind,
-            env.water_surface,
-            env.water_density,
-            env.current
-        ),
-        (1.225, DVec3::ZERO, None, 1025.0, DVec3::ZERO)
-    );
+    assert_eq!((env.air_density, env.wind, env.water_surface, env.water_density, env.current), (1.225, DVec3::ZERO, None, 1025.0, DVec3::ZERO));
     let b = &s.bodies[0];
-    assert_eq!(
-        (b.rotation, b.linear_velocity, b.angular_velocity),
-        (DQuat::IDENTITY, DVec3::ZERO, DVec3::ZERO)
-    );
-    assert_eq!(
-        (
-            b.friction,
-            b.wind_area,
-            b.wind_coefficient,
-            b.motion.is_none()
-        ),
-        (0.5, 0.0, 0.0, true)
-    );
+    assert_eq!((b.rotation, b.linear_velocity, b.angular_velocity), (DQuat::IDENTITY, DVec3::ZERO, DVec3::ZERO));
+    assert_eq!((b.friction, b.wind_area, b.wind_coefficient, b.motion.is_none()), (0.5, 0.0, 0.0, true));
     let c = &s.cables[0];
-    assert_eq!(
-        (
-            c.damping,
-            c.friction,
-            c.drag_normal,
-            c.drag_tangential,
-            c.added_mass
-        ),
-        (0.0, 0.3, 1.2, 0.008, 1.0)
-    );
-    assert_eq!(
-        (c.ei2, c.shear_stiffness, c.contacts, c.material.is_none()),
-        (1.0, None, true, true)
-    );
-    assert_eq!(
-        c.end,
-        CableEnd::Body {
-            body: "hook".into(),
-            anchor: DVec3::ZERO,
-            clamp: false
-        }
-    );
+    assert_eq!((c.damping, c.friction, c.drag_normal, c.drag_tangential, c.added_mass), (0.0, 0.3, 1.2, 0.008, 1.0));
+    assert_eq!((c.ei2, c.shear_stiffness, c.contacts, c.material.is_none()), (1.0, None, true, true));
+    assert_eq!(c.end, CableEnd::Body { body: "hook".into(), anchor: DVec3::ZERO, clamp: false });
     // Free end: straight down from the start, of the cable's length.
     let s = parse(&replace("end = { body = \"hook\" }\n", ""), "free.toml").unwrap();
-    assert_eq!(
-        s.cables[0].path,
-        vec![DVec3::ZERO, DVec3::new(0.0, -5.0, 0.0)]
-    );
+    assert_eq!(s.cables[0].path, vec![DVec3::ZERO, DVec3::new(0.0, -5.0, 0.0)]);
 }
 
 #[test]
 fn random_corruption_never_panics() {
     let mut state: u64 = 0x2545_F491_4F6C_DD1D;
     let mut next = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
+        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
         (state >> 33) as usize
     };
     const GARBAGE: &[&str] = &[
@@ -771,15 +417,10 @@ fn random_corruption_never_panics() {
         "000",
     ];
     // FUZZ_ITERS=200000 for a longer run.
-    let iters: usize = std::env::var("FUZZ_ITERS")
-        .ok()
-        .and_then(|s| s.parse().ok())
-        .unwrap_or(2000);
+    let iters: usize = std::env::var("FUZZ_ITERS").ok().and_then(|s| s.parse().ok()).unwrap_or(2000);
     let mut errors = 0;
     for i in 0..iters {
-        let mut chars: Vec<char> = if i % 2 == 0 { docs_example() } else { BASE }
-            .chars()
-            .collect();
+        let mut chars: Vec<char> = if i % 2 == 0 { docs_example() } else { BASE }.chars().collect();
         for _ in 0..1 + next() % 3 {
             let at = next() % (chars.len() + 1);
             if next() % 2 == 0 && at < chars.len() {
@@ -799,20 +440,18 @@ fn random_corruption_never_panics() {
             assert!(e.line >= 1 && e.col >= 1, "no position:\n{shown}");
         }
     }
-    assert!(
-        errors > iters / 4,
-        "only {errors} of {iters} mutations were rejected"
-    );
+    assert!(errors > iters / 4, "only {errors} of {iters} mutations were rejected");
 }
 #[test]
 fn deeply_nested_input_is_an_error_not_a_stack_overflow() {
     let n = 100_000;
-    let src = format!("{BASE}\n[[body]]\nname='k'\ntype='kinematic'\nshape='ball'\nradius=1\nmotion = {{ type = 'table', points = {}{} }}\n", "[".repeat(n), "]".repeat(n));
-    let e = check(&src, 30, 116, "TOML syntax error");
-    assert!(
-        e.to_string().len() < 400,
-        "the long line is cut around the column:\n{e}"
+    let src = format!(
+        "{BASE}\n[[body]]\nname='k'\ntype='kinematic'\nshape='ball'\nradius=1\nmotion = {{ type = 'table', points = {}{} }}\n",
+        "[".repeat(n),
+        "]".repeat(n)
     );
+    let e = check(&src, 30, 116, "TOML syntax error");
+    assert!(e.to_string().len() < 400, "the long line is cut around the column:\n{e}");
 }
 
 // ---------------------------------------------------------------------------
@@ -839,11 +478,7 @@ fn cable_err(extra: &str, marker: &str, phrase: &str) -> ScenarioError {
 fn point_loads_are_validated() {
     cable_err("loads = [{ s = nan, force = [0, 1, 0] }]", "nan", "cable `rope`: load 1: `s` must be a finite number, found NaN");
     cable_err("loads = [{ s = -1, force = [0, 1, 0] }]", "-1", "load 1: `s` must be at least 0 m, found -1");
-    cable_err(
-        "loads = [{ s = 5, force = [0, 1, 0] }, { s = 6, force = [0, 1, 0] }]",
-        "6,",
-        "load 2: `s` must be at most the cable's `length` 5 m, found 6",
-    );
+    cable_err("loads = [{ s = 5, force = [0, 1, 0] }, { s = 6, force = [0, 1, 0] }]", "6,", "load 2: `s` must be at most the cable's `length` 5 m, found 6");
     cable_err("loads = [{ s = 2, force = [0, 1] }]", "[0, 1]", "load 1: `force` must have 3 components [x, y, z] (N), found 2");
     cable_err("loads = [{ s = 2, force = [0, inf, 0] }]", "inf", "load 1: `force` must be a finite number");
     cable_err("loads = [{ s = 2, force = [0, 1, 0], moment = [nan, 0, 0] }]", "nan", "load 1: `moment` must be a finite number");
@@ -920,7 +555,11 @@ fn spin_motion_is_validated() {
     hub_err("{ type = \"spin\", axis = [0, 1, 0], rate = [[0, 1]], period = 2 }", "2 }", "`period` does not apply to a `spin` motion");
     hub_err("{ type = \"sine\", amplitude = [1, 0, 0], period = 2, axis = [0, 1, 0] }", "[0, 1, 0]", "`axis` does not apply to a `sine` motion");
     hub_err("{ type = \"table\", points = [[0, [1, 2, 3]]], rate = [[0, 1]] }", "[[0, 1]]", "`rate` does not apply to a `table` motion");
-    hub_err("{ type = \"spinning\", axis = [0, 1, 0], rate = [[0, 1]] }", "\"spinning\"", "unknown motion type `spinning`; expected one of `sine`, `table`, `spin`");
+    hub_err(
+        "{ type = \"spinning\", axis = [0, 1, 0], rate = [[0, 1]] }",
+        "\"spinning\"",
+        "unknown motion type `spinning`; expected one of `sine`, `table`, `spin`",
+    );
 }
 
 #[test]

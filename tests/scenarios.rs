@@ -206,7 +206,8 @@ fn trolley_kick_scenario_initial_velocity() {
     let rel: Vec<f64> = rows.iter().map(|r| r[1] - v_cm * r[0]).collect();
     let amp = 0.5 * (rel.iter().cloned().fold(f64::MIN, f64::max) - rel.iter().cloned().fold(f64::MAX, f64::min));
     let t: Vec<f64> = rows.iter().map(|r| r[0]).collect();
-    let ups: Vec<f64> = (1..rel.len()).filter(|&k| rel[k - 1] < 0.0 && rel[k] >= 0.0).map(|k| t[k - 1] + (t[k] - t[k - 1]) * rel[k - 1] / (rel[k - 1] - rel[k])).collect();
+    let ups: Vec<f64> =
+        (1..rel.len()).filter(|&k| rel[k - 1] < 0.0 && rel[k] >= 0.0).map(|k| t[k - 1] + (t[k] - t[k - 1]) * rel[k - 1] / (rel[k - 1] - rel[k])).collect();
     let period = (ups[ups.len() - 1] - ups[0]) / (ups.len() - 1) as f64;
     let (amp_ref, period_ref) = ((u0 - v_cm) / omega, 2.0 * std::f64::consts::PI / omega);
     println!(
@@ -224,7 +225,9 @@ fn trolley_kick_scenario_initial_velocity() {
 /// error at the body's file:line:col.
 #[test]
 fn impossible_initial_velocity_is_refused_with_its_position() {
-    let src = std::fs::read_to_string("assets/scenarios/trolley_kick.toml").unwrap().replace("linear_velocity = [0.2, 0.0, 0.0]", "linear_velocity = [0.2, 0.0, 0.5]");
+    let src = std::fs::read_to_string("assets/scenarios/trolley_kick.toml")
+        .unwrap()
+        .replace("linear_velocity = [0.2, 0.0, 0.0]", "linear_velocity = [0.2, 0.0, 0.5]");
     let sc = scenario::parse(&src, "v.toml").unwrap_or_else(|e| panic!("{e}"));
     let err = World::new(sc).unwrap_err().to_string();
     println!("{err}");
@@ -347,7 +350,16 @@ fn bend_45_scenario_out_of_plane_tip_load() {
         let tip = glam::DVec3::from_slice(&row[3 * k..3 * k + 3]);
         let d = tip - initial - glam::DVec3::new(x0, 0.0, 0.0);
         let err = d.distance(reference) / reference.length();
-        println!("P={p}: Δ = ({:.3}, {:.3}, {:.3}) vs ({:.3}, {:.3}, {:.3}): |error| {:.3} % of |Δ|", d.x, d.y, d.z, reference.x, reference.y, reference.z, 100.0 * err);
+        println!(
+            "P={p}: Δ = ({:.3}, {:.3}, {:.3}) vs ({:.3}, {:.3}, {:.3}): |error| {:.3} % of |Δ|",
+            d.x,
+            d.y,
+            d.z,
+            reference.x,
+            reference.y,
+            reference.z,
+            100.0 * err
+        );
         assert!(err < 5e-3, "P={p}: {err}");
     }
     assert_stays(&row, &end, 1e-9);
@@ -387,8 +399,23 @@ fn spin_up_scenario_tip_deflection() {
     let (t_peak, peak) = (ts[k] + off * h, y1 - 0.25 * (y0 - y2) * off);
     let (peak_ref, t_peak_ref) = (-0.57375, 6.76);
     let (ep, et) = (peak / peak_ref - 1.0, t_peak - t_peak_ref);
-    println!("peak v_tip {peak:.5} m at {t_peak:.3} s (ref {peak_ref} at {t_peak_ref}): {:+.3} %, {et:+.3} s; hub rate vs closed form within {worst_rate:.1e} rad/s", 100.0 * ep);
-    let table = [(1.0, -0.02054), (2.0, -0.10237), (3.0, -0.21725), (4.0, -0.34225), (5.0, -0.46844), (6.0, -0.54354), (7.0, -0.57122), (8.0, -0.54273), (10.0, -0.36267), (12.0, -0.15084), (14.0, -0.02028)];
+    println!(
+        "peak v_tip {peak:.5} m at {t_peak:.3} s (ref {peak_ref} at {t_peak_ref}): {:+.3} %, {et:+.3} s; hub rate vs closed form within {worst_rate:.1e} rad/s",
+        100.0 * ep
+    );
+    let table = [
+        (1.0, -0.02054),
+        (2.0, -0.10237),
+        (3.0, -0.21725),
+        (4.0, -0.34225),
+        (5.0, -0.46844),
+        (6.0, -0.54354),
+        (7.0, -0.57122),
+        (8.0, -0.54273),
+        (10.0, -0.36267),
+        (12.0, -0.15084),
+        (14.0, -0.02028),
+    ];
     let mut worst: f64 = 0.0;
     for (t, v_ref) in table {
         let i = ts.iter().position(|&x| (x - t).abs() < 0.5 * h).unwrap();
@@ -527,7 +554,14 @@ path = [[0, 0, 1], [1, 0, 1]]
         let rot = DMat3::from_rotation_y(th);
         let r = rot * DVec3::Z;
         let (wv, av) = (DVec3::Y * w, DVec3::Y * al);
-        BaseState { rotation: rot, position: r, angular_velocity: wv, velocity: wv.cross(r), angular_acceleration: av, acceleration: av.cross(r) + wv.cross(wv.cross(r)) }
+        BaseState {
+            rotation: rot,
+            position: r,
+            angular_velocity: wv,
+            velocity: wv.cross(r),
+            angular_acceleration: av,
+            acceleration: av.cross(r) + wv.cross(wv.cross(r)),
+        }
     }));
     let sec = RopeSection { linear_density: 1.0, ea: 1e6, ei: 1.0, ei2: 1.0, gj: 1.0, min_breaking_load: 0.0 };
     let model = RopeBuilder::new(1.0, 5, sec, 0.02)

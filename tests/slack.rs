@@ -151,11 +151,8 @@ fn a_failed_step_leaves_state_and_time_unchanged() {
 fn horizontal_release_runs_at_the_frame_step_with_tension_only() {
     for n in [12, 48] {
         let run = |tension_only: bool| {
-            let model = RopeBuilder::new(12.0, n, steel20(), 0.02)
-                .path(vec![DVec3::ZERO, DVec3::new(12.0, 0.0, 0.0)])
-                .tension_only(tension_only)
-                .build()
-                .unwrap();
+            let model =
+                RopeBuilder::new(12.0, n, steel20(), 0.02).path(vec![DVec3::ZERO, DVec3::new(12.0, 0.0, 0.0)]).tension_only(tension_only).build().unwrap();
             let mut cable = Cable::new(model, Scheme::default()).unwrap();
             while cable.time() < 3.0 - 1e-9 {
                 cable.step(1.0 / 60.0).unwrap();
@@ -179,7 +176,11 @@ fn elastic_catenary(span: f64, l0: f64, w: f64, ea: f64, s: f64) -> (f64, f64) {
     let (mut lo, mut hi) = (1e-9 * w * l0, 1e3 * w * l0);
     for _ in 0..200 {
         let mid = (lo * hi).sqrt();
-        if span_of(mid) < span { lo = mid } else { hi = mid }
+        if span_of(mid) < span {
+            lo = mid
+        } else {
+            hi = mid
+        }
     }
     let h = (lo * hi).sqrt();
     let sag = h / w * ((1.0 + (w * l0 / (2.0 * h)).powi(2)).sqrt() - 1.0) + w * l0 * l0 / (8.0 * ea);
@@ -190,12 +191,23 @@ fn elastic_catenary(span: f64, l0: f64, w: f64, ea: f64, s: f64) -> (f64, f64) {
 /// parabola (both of the rope's length; the V's vertex a 67° kink).
 fn slack_paths() -> [(&'static str, Vec<DVec3>); 2] {
     let v = vec![DVec3::ZERO, DVec3::new(5.0, -(36.0f64 - 25.0).sqrt(), 0.0), DVec3::new(10.0, 0.0, 0.0)];
-    let parabola = |a: f64| (0..=200).map(|i| { let x = i as f64 * 0.05; DVec3::new(x, a * x * (x - 10.0), 0.0) }).collect::<Vec<_>>();
+    let parabola = |a: f64| {
+        (0..=200)
+            .map(|i| {
+                let x = i as f64 * 0.05;
+                DVec3::new(x, a * x * (x - 10.0), 0.0)
+            })
+            .collect::<Vec<_>>()
+    };
     let length = |p: &[DVec3]| p.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>();
     let (mut lo, mut hi) = (0.0, 1.0);
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
-        if length(&parabola(mid)) < 12.0 { lo = mid } else { hi = mid }
+        if length(&parabola(mid)) < 12.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
     }
     [("V", v), ("parabola", parabola(0.5 * (lo + hi)))]
 }
@@ -260,7 +272,11 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
             let zero = vec![0.0; q.len()];
             let fs = stat.element_forces(0, &q, &zero);
             let t_static = (fs.tension.powi(2) + fs.shear[0].powi(2) + fs.shear[1].powi(2)).sqrt();
-            println!("   static solve: end force {t_static:.2} N ({:+.1e} from the dynamic run, {:+.1e} from the catenary)", t_end / t_static - 1.0, t_static / t_ref - 1.0);
+            println!(
+                "   static solve: end force {t_static:.2} N ({:+.1e} from the dynamic run, {:+.1e} from the catenary)",
+                t_end / t_static - 1.0,
+                t_static / t_ref - 1.0
+            );
             assert!(es.abs() < 0.01, "{material} {shape}: sag {es:+.2e}");
             assert!((t_end / t_static - 1.0).abs() < 1e-3, "{material} {shape}: not settled");
             if section.ei < 1.0 {

@@ -156,4 +156,3 @@ fn two_leg_sling_swings_about_the_anchor_line_at_the_frame_step() {
     assert!(err.abs() < 1e-3, "sling swing period {measured} vs {period}");
     assert!(worst_t < 1e-3, "tension changed by {worst_t:e} of its static value");
 }
-

@@ -153,16 +153,22 @@ fn elastic_catenary_level_supports() {
 /// is `length` (the initial guess a user would draw).
 fn parabola_of_length(span: f64, length: f64) -> Vec<DVec3> {
     let pts = |d: f64| -> Vec<DVec3> {
-        (0..=400).map(|k| {
-            let x = span * k as f64 / 400.0;
-            DVec3::new(x, -4.0 * d * x * (span - x) / (span * span), 0.0)
-        }).collect()
+        (0..=400)
+            .map(|k| {
+                let x = span * k as f64 / 400.0;
+                DVec3::new(x, -4.0 * d * x * (span - x) / (span * span), 0.0)
+            })
+            .collect()
     };
     let len = |p: &[DVec3]| p.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>();
     let (mut lo, mut hi) = (0.0, span);
     for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
-        if len(&pts(mid)) < length { lo = mid } else { hi = mid }
+        if len(&pts(mid)) < length {
+            lo = mid
+        } else {
+            hi = mid
+        }
     }
     pts(0.5 * (lo + hi))
 }

@@ -144,7 +144,16 @@ fn bend45_out_of_plane_tip_load() {
         for (k, &n) in ns.iter().enumerate() {
             let d = at(&runs[k], p);
             let err = d.distance(reference) / reference.length();
-            println!("N={n} P={p}: Δ = ({:.3}, {:.3}, {:.3}) vs ({:.3}, {:.3}, {:.3}): |error| {:.3} % of |Δ|", d.x, d.y, d.z, reference.x, reference.y, reference.z, 100.0 * err);
+            println!(
+                "N={n} P={p}: Δ = ({:.3}, {:.3}, {:.3}) vs ({:.3}, {:.3}, {:.3}): |error| {:.3} % of |Δ|",
+                d.x,
+                d.y,
+                d.z,
+                reference.x,
+                reference.y,
+                reference.z,
+                100.0 * err
+            );
             errs.push(err);
         }
         for k in 1..ns.len() - 1 {
@@ -157,7 +166,13 @@ fn bend45_out_of_plane_tip_load() {
         }
         let extrapolated = (4.0 * at(&runs[4], p) - at(&runs[3], p)) / 3.0;
         let e_extra = extrapolated.distance(reference) / reference.length();
-        println!("  P={p}: Richardson (4Δ(128) − Δ(64))/3 = ({:.3}, {:.3}, {:.3}): |error| {:.3} % of |Δ|", extrapolated.x, extrapolated.y, extrapolated.z, 100.0 * e_extra);
+        println!(
+            "  P={p}: Richardson (4Δ(128) − Δ(64))/3 = ({:.3}, {:.3}, {:.3}): |error| {:.3} % of |Δ|",
+            extrapolated.x,
+            extrapolated.y,
+            extrapolated.z,
+            100.0 * e_extra
+        );
         assert!(e_extra < 1e-3, "P={p}: extrapolated error {e_extra}");
         assert!(errs[1] < 5e-3 && errs[2] < 5e-3, "P={p}: N = 16, 32 outside 0.5 %");
     }
@@ -206,7 +221,6 @@ fn bend45_objectivity_under_rigid_rotation() {
     let worst = plain.iter().zip(&about_y).map(|(a, b)| a.1.distance(b.1)).fold(0.0, f64::max);
     println!("rotation 1 rad about y (frames rotate with the problem): largest tip-displacement difference over the load path {worst:.2e}");
     assert!(worst < 1e-7 * plain.last().unwrap().1.length(), "not objective: {worst}");
-
 }
 
 /// Strict objectivity under an arbitrary rotation at N = 16 (difference
@@ -262,7 +276,18 @@ fn straight_cantilever_convergence_order_2d_vs_3d() {
         let tips: Vec<DVec3> = [10, 20, 40, 80].iter().map(|&n| cant(n, force, moment)).collect();
         let d: Vec<f64> = tips.windows(2).map(|w| w[0].distance(w[1])).collect();
         let ratios: Vec<f64> = d.windows(2).map(|w| w[0] / w[1]).collect();
-        println!("{name}: tip N=80 ({:.5}, {:.5}, {:.5}); |x(N) − x(2N)| for N = 10, 20, 40: {:.2e}, {:.2e}, {:.2e}; ratios {:.2}, {:.2} (order {})", tips[3].x, tips[3].y, tips[3].z, d[0], d[1], d[2], ratios[0], ratios[1], if expected > 3.0 { 2 } else { 1 });
+        println!(
+            "{name}: tip N=80 ({:.5}, {:.5}, {:.5}); |x(N) − x(2N)| for N = 10, 20, 40: {:.2e}, {:.2e}, {:.2e}; ratios {:.2}, {:.2} (order {})",
+            tips[3].x,
+            tips[3].y,
+            tips[3].z,
+            d[0],
+            d[1],
+            d[2],
+            ratios[0],
+            ratios[1],
+            if expected > 3.0 { 2 } else { 1 }
+        );
         assert!((ratios[1] - expected).abs() < 0.15 * expected, "{name}: ratio {}", ratios[1]);
     }
 }
@@ -516,7 +541,11 @@ fn steel_rod(n: usize, diameter_for_inertia: f64, start: RopeStart) -> RopeModel
 fn cantilever_natural_frequencies() {
     let beta_l: [f64; 3] = [1.875104, 4.694091, 7.854757];
     // §4 table (percent), with half a unit of its last printed digit.
-    let table = [(10, [(-0.46, 0.006), (-1.56, 0.006), (-2.6, 0.06)]), (20, [(-0.12, 0.006), (-0.40, 0.006), (-0.65, 0.006)]), (40, [(-0.03, 0.006), (-0.10, 0.006), (-0.16, 0.006)])];
+    let table = [
+        (10, [(-0.46, 0.006), (-1.56, 0.006), (-2.6, 0.06)]),
+        (20, [(-0.12, 0.006), (-0.40, 0.006), (-0.65, 0.006)]),
+        (40, [(-0.03, 0.006), (-0.10, 0.006), (-0.16, 0.006)]),
+    ];
     let (ei, rho_a) = steel_ei_rho_a();
     assert!((ei / 103.0835 - 1.0).abs() < 1e-6 && (rho_a / 0.616538 - 1.0).abs() < 1e-6);
     for (n, table_err) in table {
@@ -590,7 +619,12 @@ fn cantilever_natural_frequencies() {
     let chain_axial = |j: usize| 2.0 * (ea / le / (mu * le)).sqrt() * (((2 * j - 1) as f64) * PI / (2.0 * (2 * n + 1) as f64)).sin();
     for j in 1..=3 {
         let err = wa[j - 1] / chain_axial(j) - 1.0;
-        println!("axial mode {j}, N={n}: {:.3} Hz vs spring–mass chain {:.3} Hz ({err:+.1e}); continuum {:.3} Hz", wa[j - 1] / (2.0 * PI), chain_axial(j) / (2.0 * PI), (2 * j - 1) as f64 * 1293.05);
+        println!(
+            "axial mode {j}, N={n}: {:.3} Hz vs spring–mass chain {:.3} Hz ({err:+.1e}); continuum {:.3} Hz",
+            wa[j - 1] / (2.0 * PI),
+            chain_axial(j) / (2.0 * PI),
+            (2 * j - 1) as f64 * 1293.05
+        );
         assert!(err.abs() < 1e-10);
     }
     // The axial compliance of each element sits at its inboard joint, so in
@@ -708,11 +742,15 @@ fn steel_ei_rho_a() -> (f64, f64) {
 /// Inverse of a small matrix by Gauss–Jordan with partial pivoting.
 fn invert(a: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let n = a.len();
-    let mut m: Vec<Vec<f64>> = a.iter().enumerate().map(|(i, row)| {
-        let mut r = row.clone();
-        r.extend((0..n).map(|j| if i == j { 1.0 } else { 0.0 }));
-        r
-    }).collect();
+    let mut m: Vec<Vec<f64>> = a
+        .iter()
+        .enumerate()
+        .map(|(i, row)| {
+            let mut r = row.clone();
+            r.extend((0..n).map(|j| if i == j { 1.0 } else { 0.0 }));
+            r
+        })
+        .collect();
     for c in 0..n {
         let p = (c..n).max_by(|&x, &y| m[x][c].abs().partial_cmp(&m[y][c].abs()).unwrap()).unwrap();
         m.swap(c, p);

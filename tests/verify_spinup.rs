@@ -17,11 +17,7 @@ fn hub(t: f64) -> (f64, f64, f64) {
     if t <= T_S {
         let k = OMEGA_S / T_S;
         let w = 2.0 * PI / T_S;
-        (
-            k * (0.5 * t * t + (T_S / (2.0 * PI)).powi(2) * ((w * t).cos() - 1.0)),
-            k * (t - (w * t).sin() / w),
-            k * (1.0 - (w * t).cos()),
-        )
+        (k * (0.5 * t * t + (T_S / (2.0 * PI)).powi(2) * ((w * t).cos() - 1.0)), k * (t - (w * t).sin() / w), k * (1.0 - (w * t).cos()))
     } else {
         (OMEGA_S * (t - 0.5 * T_S), OMEGA_S, 0.0)
     }
@@ -116,7 +112,11 @@ fn spin_up_beam_tip_deflection() {
         let t_peak = ts[k] + off * h;
         let peak = y1 - 0.25 * (y0 - y2) * off;
         let (ep, et) = (peak / peak_ref - 1.0, t_peak - t_peak_ref);
-        println!("N={n}: peak v_tip {peak:.5} m at {t_peak:.3} s (ref {peak_ref} at {t_peak_ref}): {:+.3} %, {et:+.3} s; {:.2} Newton/step", 100.0 * ep, newton as f64 / (ts.len() - 1) as f64);
+        println!(
+            "N={n}: peak v_tip {peak:.5} m at {t_peak:.3} s (ref {peak_ref} at {t_peak_ref}): {:+.3} %, {et:+.3} s; {:.2} Newton/step",
+            100.0 * ep,
+            newton as f64 / (ts.len() - 1) as f64
+        );
         let mut line = String::from("   ");
         let mut worst: f64 = 0.0;
         for (t, v_ref) in table {

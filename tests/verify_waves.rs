@@ -399,7 +399,8 @@ fn largest_eigenvalue(a: &[Vec<f64>]) -> f64 {
 /// too far out: the error is first order in 1/N and grows with μl/m.
 #[test]
 fn axial_frequency_rope_mass_correction() {
-    let rows: [(&str, f64, f64, f64, f64, f64); 3] = [("crane", 1.6e7, 1.6, 50.0, 5000.0, 7.978729), ("very deep", 1.6e7, 1.6, 2000.0, 2000.0, 1.594454), ("light payload", 1e6, 1.0, 10.0, 1.0, 142.887)];
+    let rows: [(&str, f64, f64, f64, f64, f64); 3] =
+        [("crane", 1.6e7, 1.6, 50.0, 5000.0, 7.978729), ("very deep", 1.6e7, 1.6, 2000.0, 2000.0, 1.594454), ("light payload", 1e6, 1.0, 10.0, 1.0, 142.887)];
     for (name, ea, mu, l, m, table) in rows {
         let c = (ea / mu).sqrt();
         let ratio = mu * l / m;

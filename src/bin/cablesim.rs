@@ -57,7 +57,13 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Check { file } => match load(&file) {
             Ok((_, world)) => {
-                println!("{}: ok ({} cables, {} bodies, {} probes)", file.display(), world.cable_names().len(), world.scenario.bodies.len(), world.scenario.probes.len());
+                println!(
+                    "{}: ok ({} cables, {} bodies, {} probes)",
+                    file.display(),
+                    world.cable_names().len(),
+                    world.scenario.bodies.len(),
+                    world.scenario.probes.len()
+                );
                 ExitCode::SUCCESS
             }
             Err(code) => code,

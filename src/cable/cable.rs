@@ -2,8 +2,8 @@
 //! the queries users read (node positions, tension, moments, energy).
 
 use super::chain::{LinkLoad, SpringLaw, StaticError};
-use super::spatial::V6;
 use super::rope::{RopeLayout, RopeModel, ELEMENT_DOFS};
+use super::spatial::V6;
 use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
 use glam::{DMat3, DVec3};
 use thiserror::Error;
@@ -103,14 +103,7 @@ impl Cable {
             model.chain.max_frequency = Some((1.2 * measured).max(analytic));
         }
         let state = State::new(&mut model.chain, 0.0, model.q0.clone(), vec![0.0; n])?;
-        let mut c = Cable {
-            model,
-            state,
-            integrator: Integrator::new(scheme),
-            last_stats: StepStats::default(),
-            total_stats: StepStats::default(),
-            steps: 0,
-        };
+        let mut c = Cable { model, state, integrator: Integrator::new(scheme), last_stats: StepStats::default(), total_stats: StepStats::default(), steps: 0 };
         c.refresh();
         Ok(c)
     }
@@ -140,10 +133,9 @@ impl Cable {
         // iterate (within the position tolerance of the final state): the
         // chain's kinematics are current. Other schemes last evaluated an
         // intermediate stage.
-        let newton_converged = matches!(
-            self.integrator.scheme,
-            Scheme::GeneralizedAlpha { .. } | Scheme::Hht { .. } | Scheme::Newmark { .. } | Scheme::LinearAcceleration
-        ) && stats.substeps_used == 1;
+        let newton_converged =
+            matches!(self.integrator.scheme, Scheme::GeneralizedAlpha { .. } | Scheme::Hht { .. } | Scheme::Newmark { .. } | Scheme::LinearAcceleration)
+                && stats.substeps_used == 1;
         if self.model.layout.free_start {
             self.rechart_free_start()?;
         }
@@ -466,9 +458,8 @@ impl Cable {
         }
         // Responses u = (M + c K_t)⁻¹ Jᵀ e to unit spatial forces e on each
         // target link (generalized force S_s·e on every sub-joint inboard).
-        let link_velocity = |ch: &super::chain::Chain, x: &[f64], link: usize| {
-            ch.rows[..=link].iter().zip(x).fold(V6::ZERO, |acc, (row, xs)| acc + row.s * *xs)
-        };
+        let link_velocity =
+            |ch: &super::chain::Chain, x: &[f64], link: usize| ch.rows[..=link].iter().zip(x).fold(V6::ZERO, |acc, (row, xs)| acc + row.s * *xs);
         let mut responses = vec![vec![0.0; n]; m];
         let mut rhs = vec![0.0; n];
         for (i, tg) in targets.iter().enumerate() {

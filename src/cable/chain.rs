@@ -184,14 +184,7 @@ pub struct BaseState {
 impl BaseState {
     /// A base at rest with the given pose.
     pub fn fixed(rotation: DMat3, position: DVec3) -> Self {
-        BaseState {
-            rotation,
-            position,
-            angular_velocity: DVec3::ZERO,
-            velocity: DVec3::ZERO,
-            angular_acceleration: DVec3::ZERO,
-            acceleration: DVec3::ZERO,
-        }
+        BaseState { rotation, position, angular_velocity: DVec3::ZERO, velocity: DVec3::ZERO, angular_acceleration: DVec3::ZERO, acceleration: DVec3::ZERO }
     }
 }
 
@@ -385,16 +378,7 @@ pub(crate) struct LinkScratch {
 
 impl Default for LinkScratch {
     fn default() -> Self {
-        LinkScratch {
-            ia: DMat3::ZERO,
-            ib: DMat3::ZERO,
-            m: 0.0,
-            f: V6::ZERO,
-            ha: DMat3::ZERO,
-            hb: DMat3::ZERO,
-            anchor: u32::MAX,
-            damping: (0.0, 0.0),
-        }
+        LinkScratch { ia: DMat3::ZERO, ib: DMat3::ZERO, m: 0.0, f: V6::ZERO, ha: DMat3::ZERO, hb: DMat3::ZERO, anchor: u32::MAX, damping: (0.0, 0.0) }
     }
 }
 
@@ -586,7 +570,12 @@ impl Chain {
         let mut count = 0u32;
         for s in 0..n {
             let used = self.joints[s].link.is_some();
-            self.link_slot[s] = if used { count += 1; count - 1 } else { u32::MAX };
+            self.link_slot[s] = if used {
+                count += 1;
+                count - 1
+            } else {
+                u32::MAX
+            };
         }
         for s in self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)) {
             if s < n && self.link_slot[s] == u32::MAX {
@@ -613,10 +602,8 @@ impl Chain {
         for (k, rs) in self.rotation_springs.iter().enumerate() {
             let f = rs.first;
             // A block never straddles a limb start or a limb's parent link.
-            let tree_free = || {
-                self.limbs.is_empty()
-                    || (!self.limb_start[f + 1] && !self.limb_start[f + 2] && self.limb_parent[f..f + 3].iter().all(|x| *x == u32::MAX))
-            };
+            let tree_free =
+                || self.limbs.is_empty() || (!self.limb_start[f + 1] && !self.limb_start[f + 2] && self.limb_parent[f..f + 3].iter().all(|x| *x == u32::MAX));
             if f + 2 < n && self.link_slot[f] == u32::MAX && self.link_slot[f + 1] == u32::MAX && tree_free() {
                 self.block[f] = k as u32;
                 self.block[f + 1] = BLOCK_INNER;
@@ -658,8 +645,7 @@ impl Chain {
         let bw = base.angular_velocity;
         // Spatial velocity/acceleration of the base, at the reference point.
         let mut prev_vel = V6::new(bw, base.velocity - bw.cross(bp));
-        let mut prev_acc =
-            V6::new(base.angular_acceleration, base.acceleration - base.angular_acceleration.cross(bp) - bw.cross(base.velocity));
+        let mut prev_acc = V6::new(base.angular_acceleration, base.acceleration - base.angular_acceleration.cross(bp) - bw.cross(base.velocity));
         let mut prev_rot = base.rotation;
         let mut prev_pos = bp;
         self.base_pose = (prev_rot, prev_pos);
@@ -698,11 +684,8 @@ impl Chain {
             self.poses[s] = Pose { rot, pos, vel };
             let row = &mut self.rows[s];
             row.s = sv;
-            let (elastic, stiffness, damping) = if self.frozen && j.law != SpringLaw::Linear {
-                j.spring_force_on_branch(q[s], v[s], self.branch[s] != 0)
-            } else {
-                j.spring_force(q[s], v[s])
-            };
+            let (elastic, stiffness, damping) =
+                if self.frozen && j.law != SpringLaw::Linear { j.spring_force_on_branch(q[s], v[s], self.branch[s] != 0) } else { j.spring_force(q[s], v[s]) };
             row.stiffness = stiffness;
             row.damping = damping;
             row.elastic = elastic;
@@ -970,11 +953,7 @@ impl Chain {
             // G_s = ½(H + Hᵀ) + ½(a zᵀ + z aᵀ), a = F̄(f^c) S = S ×* f^c,
             // zᵀS = 1, aᵀS = 0, so G_s S_s = ½(H + Hᵀ) S + ½ S ×* f^c.
             let sv = row.s;
-            let sym = if sv.top == DVec3::ZERO {
-                V6::new(hb2 * sv.bot, DVec3::ZERO)
-            } else {
-                V6::new(hs * sv.top + hb2 * sv.bot, hb2.transpose() * sv.top)
-            };
+            let sym = if sv.top == DVec3::ZERO { V6::new(hb2 * sv.bot, DVec3::ZERO) } else { V6::new(hs * sv.top + hb2 * sv.bot, hb2.transpose() * sv.top) };
             row.gs = sym + sv.cross_force(fc) * 0.5;
             match solve {
                 None => r[s] = res,
@@ -1119,11 +1098,7 @@ impl Chain {
     /// Gravitational potential energy `−Σ m g·c` at the last kinematics
     /// evaluation (zero at the world origin), J.
     pub fn gravity_energy(&self) -> f64 {
-        self.joints
-            .iter()
-            .zip(&self.poses)
-            .filter_map(|(j, ps)| j.link.map(|lm| -lm.mass * self.gravity.dot(ps.pos + ps.rot * lm.com + self.origin)))
-            .sum()
+        self.joints.iter().zip(&self.poses).filter_map(|(j, ps)| j.link.map(|lm| -lm.mass * self.gravity.dot(ps.pos + ps.rot * lm.com + self.origin))).sum()
     }
 
     /// Elastic energy of the joint springs at `q`, J.
@@ -1213,10 +1188,7 @@ fn rotation_spring_forces(rs: &RotationSpring, joints: &[SubJoint], q: &[f64], v
     let moment = rs.k * theta + rs.k * theta_dot * rs.tau;
     // Q_k = (Kθ + τKθ̇)ᵀ J⁻¹ E_k = (J⁻ᵀ m)·E_k.
     let m = jinv(moment, -1.0);
-    (
-        [m.dot(axes[0]), m.dot(axes[1]), m.dot(axes[2])],
-        DMat3::from_cols(jinv(axes[0], 1.0), jinv(axes[1], 1.0), jinv(axes[2], 1.0)),
-    )
+    ([m.dot(axes[0]), m.dot(axes[1]), m.dot(axes[2])], DMat3::from_cols(jinv(axes[0], 1.0), jinv(axes[1], 1.0), jinv(axes[2], 1.0)))
 }
 
 impl SecondOrderSystem for Chain {
@@ -1226,17 +1198,7 @@ impl SecondOrderSystem for Chain {
     fn residual(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError> {
         self.residual_into(t, q, v, a, r)
     }
-    fn solve_tangent(
-        &mut self,
-        _t: f64,
-        _q: &[f64],
-        _v: &[f64],
-        _a: &[f64],
-        c_v: f64,
-        c_q: f64,
-        b: &[f64],
-        x: &mut [f64],
-    ) -> Result<(), SystemError> {
+    fn solve_tangent(&mut self, _t: f64, _q: &[f64], _v: &[f64], _a: &[f64], c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         self.solve_into(c_v, c_q, b, x)
     }
     fn residual_and_correction(
@@ -1578,12 +1540,7 @@ impl Chain {
                 *v = -*v;
             }
             self.solve_into(0.0, c, &r, &mut x)?;
-            let max_rot = self
-                .joints
-                .iter()
-                .zip(&x)
-                .filter(|(j, _)| j.kind == JointKind::Revolute)
-                .fold(0.0f64, |m, (_, xi)| m.max((c * xi).abs()));
+            let max_rot = self.joints.iter().zip(&x).filter(|(j, _)| j.kind == JointKind::Revolute).fold(0.0f64, |m, (_, xi)| m.max((c * xi).abs()));
             let factor = if max_rot > 0.1 { 0.1 / max_rot } else { 1.0 };
             // Steps that need the rotation limit are too long: shorten the
             // pseudo-time; otherwise lengthen it toward full Newton.

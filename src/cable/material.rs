@@ -52,14 +52,7 @@ pub fn preset(name: &str, diameter: f64) -> Option<RopeSection> {
         }
         "fibre_rope_polyester" => {
             let ei = 0.01 * 5e9 * i_solid;
-            Some(RopeSection {
-                linear_density: 0.00078 * d_mm * d_mm,
-                ea: 5e9 * area,
-                ei,
-                ei2: ei,
-                gj: 0.67 * ei,
-                min_breaking_load: 5e9 * area / 25.0,
-            })
+            Some(RopeSection { linear_density: 0.00078 * d_mm * d_mm, ea: 5e9 * area, ei, ei2: ei, gj: 0.67 * ei, min_breaking_load: 5e9 * area / 25.0 })
         }
         _ => None,
     }

@@ -20,8 +20,8 @@
 //! spring (2GJ/L_e: the half element up to the pin); a clamp doubles the
 //! first joint's stiffnesses likewise.
 
-use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkLoad, LinkMass, RotationSpring, SpringLaw, SubJoint};
 use super::cable::ElementForces;
+use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkLoad, LinkMass, RotationSpring, SpringLaw, SubJoint};
 use super::material::RopeSection;
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 use std::sync::Arc;
@@ -141,9 +141,7 @@ impl std::fmt::Debug for RopeEnd {
             RopeEnd::Free => f.write_str("Free"),
             RopeEnd::Pinned(_) => f.write_str("Pinned(..)"),
             RopeEnd::Clamped(_) => f.write_str("Clamped(..)"),
-            RopeEnd::Body { body, anchor, clamp } => {
-                f.debug_struct("Body").field("body", body).field("anchor", anchor).field("clamp", clamp).finish()
-            }
+            RopeEnd::Body { body, anchor, clamp } => f.debug_struct("Body").field("body", body).field("anchor", anchor).field("clamp", clamp).finish(),
         }
     }
 }
@@ -402,7 +400,11 @@ impl RopeBuilder {
             match &self.start {
                 RopeStart::SlidingBody { body, axis, anchor, .. } => {
                     if !(axis.is_finite() && axis.length() > 0.0 && anchor.is_finite()) {
-                        return Err(RopeError::InvalidParameter { name: "start axis/anchor", value: axis.length(), reason: "must be finite, the axis non-zero" });
+                        return Err(RopeError::InvalidParameter {
+                            name: "start axis/anchor",
+                            value: axis.length(),
+                            reason: "must be finite, the axis non-zero",
+                        });
                     }
                     Some(("start body", body))
                 }
@@ -453,10 +455,7 @@ impl RopeBuilder {
             }
         }
         if nodes[0].distance(start) > 1e-3 {
-            return Err(RopeError::InvalidPath(format!(
-                "first path point {:?} is not the start anchor {:?}",
-                nodes[0], start
-            )));
+            return Err(RopeError::InvalidPath(format!("first path point {:?} is not the start anchor {:?}", nodes[0], start)));
         }
         // Element frames by parallel transport (no initial twist).
         let mut rots = Vec::with_capacity(n);
@@ -478,12 +477,11 @@ impl RopeBuilder {
         let r = 0.5 * self.diameter;
         let me = rho * le;
         let it = me * (le * le / 12.0 + r * r / 4.0);
-        let element_mass =
-            LinkMass {
-                linear_damping: self.linear_damping,
-                angular_damping: self.angular_damping,
-                ..LinkMass::new(me, DVec3::new(0.5 * le, 0.0, 0.0), DMat3::from_diagonal(DVec3::new(0.5 * me * r * r, it, it)))
-            };
+        let element_mass = LinkMass {
+            linear_damping: self.linear_damping,
+            angular_damping: self.angular_damping,
+            ..LinkMass::new(me, DVec3::new(0.5 * le, 0.0, 0.0), DMat3::from_diagonal(DVec3::new(0.5 * me * r * r, it, it)))
+        };
         let mut joints = Vec::with_capacity(ELEMENT_DOFS * n + 6);
         let mut q0 = Vec::with_capacity(ELEMENT_DOFS * n + 6);
         let identity = DMat3::IDENTITY;
@@ -637,19 +635,8 @@ impl RopeBuilder {
         let layout = RopeLayout { elements: n, element_length: le, first, start_body, end_body, free_start };
         let zeros = vec![0.0; q0.len()];
         let mut r = vec![0.0; q0.len()];
-        chain
-            .residual_into(0.0, &q0, &zeros, &zeros, &mut r)
-            .map_err(|e| RopeError::InvalidPath(format!("initial state: {e}")))?;
-        Ok(RopeModel {
-            chain,
-            layout,
-            q0,
-            section: self.section,
-            shear_stiffness: ga,
-            diameter: self.diameter,
-            length: self.length,
-            parts: Vec::new(),
-        })
+        chain.residual_into(0.0, &q0, &zeros, &zeros, &mut r).map_err(|e| RopeError::InvalidPath(format!("initial state: {e}")))?;
+        Ok(RopeModel { chain, layout, q0, section: self.section, shear_stiffness: ga, diameter: self.diameter, length: self.length, parts: Vec::new() })
     }
 }
 
@@ -814,8 +801,7 @@ impl RopeModel {
     pub(crate) fn nodes_in(&self, l: &RopeLayout, velocity: bool) -> Vec<DVec3> {
         let ch = &self.chain;
         let point = |link: usize, local: DVec3| if velocity { ch.link_point_velocity(link, local) } else { ch.link_point(link, local) };
-        let mut out: Vec<DVec3> =
-            (0..l.elements).map(|i| if velocity { ch.joint_point_velocity(l.dof(i, 0)) } else { ch.joint_point(l.dof(i, 0)) }).collect();
+        let mut out: Vec<DVec3> = (0..l.elements).map(|i| if velocity { ch.joint_point_velocity(l.dof(i, 0)) } else { ch.joint_point(l.dof(i, 0)) }).collect();
         if l.free_start {
             out[0] = point(l.element_link(0), DVec3::ZERO);
         }
@@ -828,12 +814,7 @@ impl RopeModel {
     /// velocity (rad/s).
     pub fn body_state(&self, b: &BodyInChain) -> (DVec3, DMat3, DVec3, DVec3) {
         let ch = &self.chain;
-        (
-            ch.link_point(b.link, b.origin),
-            ch.link_rotation(b.link) * b.rotation,
-            ch.link_point_velocity(b.link, b.origin),
-            ch.link_velocity(b.link).top,
-        )
+        (ch.link_point(b.link, b.origin), ch.link_rotation(b.link) * b.rotation, ch.link_point_velocity(b.link, b.origin), ch.link_velocity(b.link).top)
     }
 
     /// Axial force of element joint `i` (tension positive), N: `EA/L_e · u +

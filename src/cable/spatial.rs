@@ -186,10 +186,7 @@ impl M6 {
     }
     /// Largest absolute entry (for scaling tests and tolerances).
     pub fn max_abs(&self) -> f64 {
-        [self.a, self.b, self.c, self.d]
-            .iter()
-            .flat_map(|m| m.to_cols_array())
-            .fold(0.0, |acc, x| acc.max(x.abs()))
+        [self.a, self.b, self.c, self.d].iter().flat_map(|m| m.to_cols_array()).fold(0.0, |acc, x| acc.max(x.abs()))
     }
 }
 

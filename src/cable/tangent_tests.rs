@@ -106,8 +106,7 @@ fn tangent_matches_finite_differences_with_payload() {
 
 #[test]
 fn tangent_matches_finite_differences_pinned_ends() {
-    let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> =
-        Arc::new(|_| (DVec3::new(0.5, -0.9, 0.2), DVec3::ZERO));
+    let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(|_| (DVec3::new(0.5, -0.9, 0.2), DVec3::ZERO));
     for (seed, c_q) in [(4, 1.0), (5, 1e-3)] {
         let mut m = loaded_rope(RopeEnd::Pinned(target.clone()), false);
         let err = check_tangent(&mut m, seed, c_q);
@@ -205,7 +204,14 @@ fn fused_and_separate_solves_agree() {
     };
     let link = m.layout.dof(2, 2);
     let p = m.chain.link_point(link, DVec3::ZERO);
-    m.chain.anchors.push(AnchorSpring { link, local_point: DVec3::ZERO, target: Arc::new(move |_| (p, DVec3::ZERO)), stiffness: 500.0, damping: 5.0, rotation: None });
+    m.chain.anchors.push(AnchorSpring {
+        link,
+        local_point: DVec3::ZERO,
+        target: Arc::new(move |_| (p, DVec3::ZERO)),
+        stiffness: 500.0,
+        damping: 5.0,
+        rotation: None,
+    });
     let n = m.chain.len();
     let mut rng = Lcg(33);
     let q: Vec<f64> = m.q0.iter().map(|x| x + 0.02 * rng.next()).collect();
@@ -231,11 +237,8 @@ fn fused_and_separate_solves_agree() {
 #[test]
 fn link_update_agrees_with_the_sum_to_first_order() {
     let end = bent_path().last().copied().unwrap();
-    let mut model = RopeBuilder::new(1.8, 12, soft_section(), 0.02)
-        .path(bent_path())
-        .end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO))))
-        .build()
-        .unwrap();
+    let mut model =
+        RopeBuilder::new(1.8, 12, soft_section(), 0.02).path(bent_path()).end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO)))).build().unwrap();
     let n = model.chain.len();
     let mut rng = Lcg(7);
     let q: Vec<f64> = model.q0.iter().map(|x| x + 0.02 * rng.next()).collect();

@@ -101,39 +101,17 @@ fn flatten(what: &'static str, rows: &[Vec<f64>], n: usize) -> Result<Vec<f64>, 
 impl DenseSystem {
     /// A system with `n` coordinates from row-major `n × n` mass, damping and
     /// stiffness matrices, and no load.
-    pub fn new(
-        n: usize,
-        mass: Vec<f64>,
-        damping: Vec<f64>,
-        stiffness: Vec<f64>,
-    ) -> Result<Self, DenseSystemError> {
+    pub fn new(n: usize, mass: Vec<f64>, damping: Vec<f64>, stiffness: Vec<f64>) -> Result<Self, DenseSystemError> {
         check_matrix("mass", &mass, n)?;
         check_matrix("damping", &damping, n)?;
         check_matrix("stiffness", &stiffness, n)?;
-        Ok(DenseSystem {
-            n,
-            mass,
-            damping,
-            stiffness,
-            force: Force::Zero,
-            f_buf: vec![0.0; n],
-            a_eff: vec![0.0; n * n],
-        })
+        Ok(DenseSystem { n, mass, damping, stiffness, force: Force::Zero, f_buf: vec![0.0; n], a_eff: vec![0.0; n * n] })
     }
 
     /// Like [`new`](Self::new) with matrices given as rows.
-    pub fn from_rows(
-        mass: &[Vec<f64>],
-        damping: &[Vec<f64>],
-        stiffness: &[Vec<f64>],
-    ) -> Result<Self, DenseSystemError> {
+    pub fn from_rows(mass: &[Vec<f64>], damping: &[Vec<f64>], stiffness: &[Vec<f64>]) -> Result<Self, DenseSystemError> {
         let n = mass.len();
-        DenseSystem::new(
-            n,
-            flatten("mass", mass, n)?,
-            flatten("damping", damping, n)?,
-            flatten("stiffness", stiffness, n)?,
-        )
+        DenseSystem::new(n, flatten("mass", mass, n)?, flatten("damping", damping, n)?, flatten("stiffness", stiffness, n)?)
     }
 
     /// The one-coordinate oscillator `m ẍ + c ẋ + k x = 0` (kg, N·s/m, N/m).
@@ -206,14 +184,7 @@ impl SecondOrderSystem for DenseSystem {
     }
 
     /// `r = M a + C v + K q − F(t)`.
-    fn residual(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        a: &[f64],
-        r: &mut [f64],
-    ) -> Result<(), SystemError> {
+    fn residual(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError> {
         if let Some(index) = first_non_finite(&[q, v, a]) {
             return Err(SystemError::NonFinite { index });
         }
@@ -232,17 +203,7 @@ impl SecondOrderSystem for DenseSystem {
     }
 
     /// Gaussian elimination with partial pivoting on `M + c_v C + c_q K`.
-    fn solve_tangent(
-        &mut self,
-        _t: f64,
-        _q: &[f64],
-        _v: &[f64],
-        _a: &[f64],
-        c_v: f64,
-        c_q: f64,
-        b: &[f64],
-        x: &mut [f64],
-    ) -> Result<(), SystemError> {
+    fn solve_tangent(&mut self, _t: f64, _q: &[f64], _v: &[f64], _a: &[f64], c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         let n = self.n;
         let a = &mut self.a_eff;
         for (idx, e) in a.iter_mut().enumerate() {
@@ -251,9 +212,7 @@ impl SecondOrderSystem for DenseSystem {
         x.copy_from_slice(b);
         let scale = a.iter().fold(0.0f64, |s, e| s.max(e.abs()));
         for col in 0..n {
-            let (piv, pmax) = (col..n)
-                .map(|r| (r, a[r * n + col].abs()))
-                .fold((col, -1.0), |best, c| if c.1 > best.1 { c } else { best });
+            let (piv, pmax) = (col..n).map(|r| (r, a[r * n + col].abs())).fold((col, -1.0), |best, c| if c.1 > best.1 { c } else { best });
             if pmax.is_nan() || pmax <= 1e-14 * scale * n as f64 {
                 return Err(SystemError::Singular { index: col, pivot: a[piv * n + col] });
             }
@@ -304,9 +263,7 @@ impl SecondOrderSystem for DenseSystem {
             b
         } else {
             let k_max = (0..n).map(|i| row_abs(&self.stiffness, i)).fold(0.0, f64::max);
-            let m_min = (0..n)
-                .map(|i| 2.0 * self.mass[i * n + i] - row_abs(&self.mass, i))
-                .fold(f64::INFINITY, f64::min);
+            let m_min = (0..n).map(|i| 2.0 * self.mass[i * n + i] - row_abs(&self.mass, i)).fold(f64::INFINITY, f64::min);
             if m_min <= 0.0 {
                 return None;
             }
@@ -323,34 +280,20 @@ mod tests {
     #[test]
     fn solve_matches_a_known_system() {
         // A zero first pivot forces a row swap.
-        let mut s = DenseSystem::new(
-            3,
-            vec![0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 2.0],
-            vec![0.0; 9],
-            vec![0.0; 9],
-        )
-        .expect("valid");
+        let mut s = DenseSystem::new(3, vec![0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 2.0], vec![0.0; 9], vec![0.0; 9]).expect("valid");
         let mut x = [0.0; 3];
-        s.solve_tangent(0.0, &[0.0; 3], &[0.0; 3], &[0.0; 3], 0.0, 0.0, &[1.0, 2.0, 3.0], &mut x)
-            .expect("regular");
+        s.solve_tangent(0.0, &[0.0; 3], &[0.0; 3], &[0.0; 3], 0.0, 0.0, &[1.0, 2.0, 3.0], &mut x).expect("regular");
         assert_eq!(x, [2.0, 1.0, 1.5]);
         let mut z = DenseSystem::oscillator(0.0, 0.0, 0.0).expect("valid");
         let mut y = [0.0];
-        assert!(matches!(
-            z.solve_tangent(0.0, &[0.0], &[0.0], &[0.0], 1.0, 1.0, &[1.0], &mut y),
-            Err(SystemError::Singular { index: 0, .. })
-        ));
+        assert!(matches!(z.solve_tangent(0.0, &[0.0], &[0.0], &[0.0], 1.0, 1.0, &[1.0], &mut y), Err(SystemError::Singular { index: 0, .. })));
     }
 
     #[test]
     fn residual_with_force_and_frequency_bounds() {
-        let mut s = DenseSystem::from_rows(
-            &[vec![2.0, 0.0], vec![0.0, 1.0]],
-            &[vec![0.1, 0.0], vec![0.0, 0.1]],
-            &[vec![6.0, -2.0], vec![-2.0, 4.0]],
-        )
-        .expect("valid")
-        .with_force(|t, f| f[1] = t);
+        let mut s = DenseSystem::from_rows(&[vec![2.0, 0.0], vec![0.0, 1.0]], &[vec![0.1, 0.0], vec![0.0, 0.1]], &[vec![6.0, -2.0], vec![-2.0, 4.0]])
+            .expect("valid")
+            .with_force(|t, f| f[1] = t);
         let mut r = [0.0; 2];
         s.residual(3.0, &[1.0, 1.0], &[1.0, 0.0], &[1.0, 2.0], &mut r).expect("finite");
         assert_eq!(r, [2.0 + 0.1 + 4.0, 2.0 + 2.0 - 3.0]);
@@ -360,9 +303,6 @@ mod tests {
         assert_eq!(osc.max_frequency(&[0.0]), Some(2.0));
         assert!(DenseSystem::new(2, vec![1.0; 3], vec![0.0; 4], vec![0.0; 4]).is_err());
         assert!(DenseSystem::oscillator(f64::NAN, 0.0, 1.0).is_err());
-        assert!(matches!(
-            s.residual(0.0, &[f64::NAN, 0.0], &[0.0; 2], &[0.0; 2], &mut r),
-            Err(SystemError::NonFinite { index: 0 })
-        ));
+        assert!(matches!(s.residual(0.0, &[f64::NAN, 0.0], &[0.0; 2], &[0.0; 2], &mut r), Err(SystemError::NonFinite { index: 0 })));
     }
 }

@@ -68,9 +68,7 @@ pub(crate) fn step<S: SecondOrderSystem + ?Sized>(
 ) -> Result<(), IntegrateError> {
     let (t, n) = (state.t, state.dof());
     let Workspace { r, zeros, sq, sv, sa, dq_sum, dv_sum, .. } = ws;
-    let mut acc = |t: f64, q: &[f64], v: &[f64], out: &mut [f64], stats: &mut StepStats| {
-        acceleration(sys, t, q, v, zeros, r, out, stats)
-    };
+    let mut acc = |t: f64, q: &[f64], v: &[f64], out: &mut [f64], stats: &mut StepStats| acceleration(sys, t, q, v, zeros, r, out, stats);
     match scheme {
         Scheme::ExplicitEuler => {
             for i in 0..n {

@@ -100,9 +100,21 @@ impl Workspace {
             return;
         }
         let vectors = [
-            &mut self.qb, &mut self.vb, &mut self.q, &mut self.v, &mut self.x, &mut self.r,
-            &mut self.dx, &mut self.dx_prev, &mut self.q_new, &mut self.sq, &mut self.sv, &mut self.sa, &mut self.dq_sum,
-            &mut self.dv_sum, &mut self.a_prev,
+            &mut self.qb,
+            &mut self.vb,
+            &mut self.q,
+            &mut self.v,
+            &mut self.x,
+            &mut self.r,
+            &mut self.dx,
+            &mut self.dx_prev,
+            &mut self.q_new,
+            &mut self.sq,
+            &mut self.sv,
+            &mut self.sa,
+            &mut self.dq_sum,
+            &mut self.dv_sum,
+            &mut self.a_prev,
         ];
         for x in vectors.into_iter().chain(self.backup.iter_mut()) {
             x.resize(n, 0.0);
@@ -194,12 +206,7 @@ impl Integrator {
     }
 
     /// Advances `state` by `h` (s). On error the state is left as it was.
-    pub fn step<S: SecondOrderSystem + ?Sized>(
-        &mut self,
-        sys: &mut S,
-        state: &mut State,
-        h: f64,
-    ) -> Result<StepStats, IntegrateError> {
+    pub fn step<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, h: f64) -> Result<StepStats, IntegrateError> {
         let t = state.t;
         let fixed = match self.substeps {
             Substeps::Auto => None,
@@ -242,37 +249,23 @@ impl Integrator {
         self.ws.restore(state);
     }
 
-    fn step_explicit<S: SecondOrderSystem + ?Sized>(
-        &mut self,
-        sys: &mut S,
-        state: &mut State,
-        h: f64,
-        stats: &mut StepStats,
-    ) -> Result<(), IntegrateError> {
+    fn step_explicit<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, h: f64, stats: &mut StepStats) -> Result<(), IntegrateError> {
         let (t, scheme) = (state.t, self.scheme.name());
         let n = match self.substeps {
             Substeps::Unchecked(n) => u64::from(n),
             policy => {
-                let omega = sys
-                    .max_frequency(&state.q)
-                    .filter(|w| !w.is_nan())
-                    .ok_or(IntegrateError::UnknownFrequency { t, scheme })?;
+                let omega = sys.max_frequency(&state.q).filter(|w| !w.is_nan()).ok_or(IntegrateError::UnknownFrequency { t, scheme })?;
                 let needed = explicit::substeps_needed(&self.scheme, h, omega).unwrap_or(1.0);
                 match policy {
                     Substeps::Fixed(n) => {
                         let limit = explicit::admissible_substep(&self.scheme, h, omega);
                         if h / f64::from(n) > limit {
-                            return Err(IntegrateError::StepTooLarge {
-                                t, h, substeps: n, limit, omega_max: omega, scheme,
-                            });
+                            return Err(IntegrateError::StepTooLarge { t, h, substeps: n, limit, omega_max: omega, scheme });
                         }
                         u64::from(n)
                     }
                     _ if needed.ceil() > self.max_explicit_substeps as f64 => {
-                        return Err(IntegrateError::TooManySubsteps {
-                            t, h, needed: needed.ceil(), max: self.max_explicit_substeps,
-                            omega_max: omega, scheme,
-                        });
+                        return Err(IntegrateError::TooManySubsteps { t, h, needed: needed.ceil(), max: self.max_explicit_substeps, omega_max: omega, scheme });
                     }
                     _ => needed.ceil() as u64,
                 }
@@ -323,9 +316,7 @@ impl Integrator {
                     let next = n.saturating_mul(2);
                     if next > max_n || next == n {
                         return Err(match failure {
-                            Failure::NotConverged { iterations } => {
-                                IntegrateError::NotConverged { t, h, substeps: n, iterations }
-                            }
+                            Failure::NotConverged { iterations } => IntegrateError::NotConverged { t, h, substeps: n, iterations },
                             Failure::Error(e) => e,
                         });
                     }
@@ -335,14 +326,7 @@ impl Integrator {
         }
     }
 
-    fn try_substeps<S: SecondOrderSystem + ?Sized>(
-        &mut self,
-        sys: &mut S,
-        state: &mut State,
-        h: f64,
-        n: u32,
-        stats: &mut StepStats,
-    ) -> Result<(), Failure> {
+    fn try_substeps<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, h: f64, n: u32, stats: &mut StepStats) -> Result<(), Failure> {
         let (t, hs) = (state.t, h / f64::from(n));
         let ws = &mut self.ws;
         let newton = &self.newton;
@@ -350,9 +334,7 @@ impl Integrator {
             state.t = t + h * f64::from(k) / f64::from(n);
             match self.scheme {
                 Scheme::WilsonTheta { theta } => step_wilson(sys, state, ws, theta, hs, newton, stats)?,
-                Scheme::LinearlyImplicit { w } => {
-                    step_linearly_implicit(sys, state, ws, w, hs, newton, stats)?
-                }
+                Scheme::LinearlyImplicit { w } => step_linearly_implicit(sys, state, ws, w, hs, newton, stats)?,
                 ref s => {
                     let p = s.alpha_parameters().expect("every other implicit scheme is generalized-α");
                     step_alpha(sys, state, ws, p, hs, newton, stats)?
@@ -403,10 +385,7 @@ mod tests {
         assert!(matches!(e, IntegrateError::InvalidScheme { .. }) && e.to_string().contains("t = 0 s"), "{e}");
         integ.substeps = Substeps::Auto;
         let mut short = State { t: 0.0, q: vec![], v: vec![], a: vec![], a_hat: vec![] };
-        assert!(matches!(
-            integ.step(&mut sys, &mut short, 0.1),
-            Err(IntegrateError::DimensionMismatch { expected: 1, got: 0, .. })
-        ));
+        assert!(matches!(integ.step(&mut sys, &mut short, 0.1), Err(IntegrateError::DimensionMismatch { expected: 1, got: 0, .. })));
         assert!(State::new(&mut sys, 0.0, vec![1.0, 2.0], vec![0.0, 0.0]).is_err());
     }
 }

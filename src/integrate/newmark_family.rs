@@ -180,13 +180,7 @@ fn linearised_at_start<S: SecondOrderSystem + ?Sized>(
 
 /// The two residuals and the solve of [`linearised_at_start`] (branches
 /// frozen by the caller): `ws.dx = δ`.
-fn linear_solve_at<S: SecondOrderSystem + ?Sized>(
-    sys: &mut S,
-    state: &State,
-    ws: &mut Workspace,
-    map: Affine,
-    stats: &mut StepStats,
-) -> Result<(), Failure> {
+fn linear_solve_at<S: SecondOrderSystem + ?Sized>(sys: &mut S, state: &State, ws: &mut Workspace, map: Affine, stats: &mut StepStats) -> Result<(), Failure> {
     let Affine { t, c_q, c_v, .. } = map;
     let eps = DIRECTION_FRACTION;
     let system = |source| Failure::Error(IntegrateError::System { t, source });

@@ -37,14 +37,7 @@ impl SecondOrderSystem for Pendulum {
         1
     }
 
-    fn residual(
-        &mut self,
-        _t: f64,
-        q: &[f64],
-        v: &[f64],
-        a: &[f64],
-        r: &mut [f64],
-    ) -> Result<(), SystemError> {
+    fn residual(&mut self, _t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError> {
         if !(q[0].is_finite() && v[0].is_finite() && a[0].is_finite()) {
             return Err(SystemError::NonFinite { index: 0 });
         }
@@ -52,17 +45,7 @@ impl SecondOrderSystem for Pendulum {
         Ok(())
     }
 
-    fn solve_tangent(
-        &mut self,
-        _t: f64,
-        q: &[f64],
-        _v: &[f64],
-        _a: &[f64],
-        c_v: f64,
-        c_q: f64,
-        b: &[f64],
-        x: &mut [f64],
-    ) -> Result<(), SystemError> {
+    fn solve_tangent(&mut self, _t: f64, q: &[f64], _v: &[f64], _a: &[f64], c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         let pivot = 1.0 + c_v * self.damping + c_q * self.gravity / self.length * q[0].cos();
         if pivot.is_nan() || pivot.abs() <= 1e-14 {
             return Err(SystemError::Singular { index: 0, pivot });

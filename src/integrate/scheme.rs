@@ -177,12 +177,7 @@ impl AlphaParameters {
 
     /// HHT-α: `α_m = 0`, `α_f = −α`, `β = (1 − α)²/4`, `γ = ½ − α`.
     pub fn hht(alpha: f64) -> Self {
-        AlphaParameters {
-            alpha_m: 0.0,
-            alpha_f: -alpha,
-            beta: 0.25 * (1.0 - alpha).powi(2),
-            gamma: 0.5 - alpha,
-        }
+        AlphaParameters { alpha_m: 0.0, alpha_f: -alpha, beta: 0.25 * (1.0 - alpha).powi(2), gamma: 0.5 - alpha }
     }
 
     /// Newmark-β: `α_m = α_f = 0`.
@@ -206,9 +201,7 @@ pub fn stability_limit(scheme: &Scheme) -> Option<f64> {
         Scheme::LinearAcceleration => newmark_limit(1.0 / 6.0, 0.5),
         Scheme::Newmark { beta, gamma } => newmark_limit(beta, gamma),
         Scheme::WilsonTheta { theta } => super::wilson::stability_limit(theta),
-        Scheme::Hht { .. } | Scheme::GeneralizedAlpha { .. } | Scheme::LinearlyImplicit { .. } => {
-            None
-        }
+        Scheme::Hht { .. } | Scheme::GeneralizedAlpha { .. } | Scheme::LinearlyImplicit { .. } => None,
     }
 }
 
@@ -218,13 +211,7 @@ fn newmark_limit(beta: f64, gamma: f64) -> Option<f64> {
     (d > 0.0).then(|| 1.0 / d.sqrt())
 }
 
-fn check(
-    scheme: &'static str,
-    parameter: &'static str,
-    value: f64,
-    ok: bool,
-    allowed: &'static str,
-) -> Result<(), SchemeError> {
+fn check(scheme: &'static str, parameter: &'static str, value: f64, ok: bool, allowed: &'static str) -> Result<(), SchemeError> {
     if ok && value.is_finite() {
         Ok(())
     } else {
@@ -277,14 +264,8 @@ impl Scheme {
             "linearly_implicit" => &["w"],
             _ => &[],
         };
-        let given = [
-            ("beta", params.beta),
-            ("gamma", params.gamma),
-            ("theta", params.theta),
-            ("alpha", params.alpha),
-            ("rho_inf", params.rho_inf),
-            ("w", params.w),
-        ];
+        let given =
+            [("beta", params.beta), ("gamma", params.gamma), ("theta", params.theta), ("alpha", params.alpha), ("rho_inf", params.rho_inf), ("w", params.w)];
         for (parameter, value) in given {
             if value.is_some() && !uses.contains(&parameter) {
                 return Err(SchemeError::UnusedParameter { scheme: canonical, parameter });
@@ -296,10 +277,7 @@ impl Scheme {
             "improved_euler" => Scheme::ImprovedEuler,
             "rk4" => Scheme::Rk4,
             "linear_acceleration" => Scheme::LinearAcceleration,
-            "newmark" => Scheme::Newmark {
-                beta: params.beta.unwrap_or(0.25),
-                gamma: params.gamma.unwrap_or(0.5),
-            },
+            "newmark" => Scheme::Newmark { beta: params.beta.unwrap_or(0.25), gamma: params.gamma.unwrap_or(0.5) },
             "central_difference" => Scheme::Newmark { beta: 0.0, gamma: 0.5 },
             "wilson_theta" => Scheme::WilsonTheta { theta: params.theta.unwrap_or(1.4) },
             "hht" => Scheme::Hht { alpha: params.alpha.unwrap_or(-0.1) },
@@ -320,12 +298,8 @@ impl Scheme {
                 check(name, "gamma", gamma, gamma >= 0.5, "gamma >= 1/2")
             }
             Scheme::WilsonTheta { theta } => check(name, "theta", theta, theta >= 1.0, "theta >= 1"),
-            Scheme::Hht { alpha } => {
-                check(name, "alpha", alpha, (-1.0 / 3.0..=0.0).contains(&alpha), "-1/3 <= alpha <= 0")
-            }
-            Scheme::GeneralizedAlpha { rho_inf } => {
-                check(name, "rho_inf", rho_inf, (0.0..=1.0).contains(&rho_inf), "0 <= rho_inf <= 1")
-            }
+            Scheme::Hht { alpha } => check(name, "alpha", alpha, (-1.0 / 3.0..=0.0).contains(&alpha), "-1/3 <= alpha <= 0"),
+            Scheme::GeneralizedAlpha { rho_inf } => check(name, "rho_inf", rho_inf, (0.0..=1.0).contains(&rho_inf), "0 <= rho_inf <= 1"),
             Scheme::LinearlyImplicit { w } => check(name, "w", w, (0.5..=1.0).contains(&w), "1/2 <= w <= 1"),
             _ => Ok(()),
         }
@@ -352,10 +326,7 @@ impl Scheme {
     /// with `β = 0`, central difference, is run through the implicit path:
     /// it solves with `M + γ h C`.)
     pub fn is_explicit(&self) -> bool {
-        matches!(
-            self,
-            Scheme::ExplicitEuler | Scheme::SymplecticEuler | Scheme::ImprovedEuler | Scheme::Rk4
-        )
+        matches!(self, Scheme::ExplicitEuler | Scheme::SymplecticEuler | Scheme::ImprovedEuler | Scheme::Rk4)
     }
 
     /// True for the schemes that solve for the new acceleration with Newton
@@ -443,10 +414,7 @@ mod tests {
         let nan = p(|p| p.rho_inf = Some(f64::NAN));
         assert!(Scheme::from_name("generalized_alpha", &nan).is_err());
         let unused = p(|p| p.theta = Some(1.4));
-        assert_eq!(
-            Scheme::from_name("newmark", &unused),
-            Err(SchemeError::UnusedParameter { scheme: "newmark", parameter: "theta" })
-        );
+        assert_eq!(Scheme::from_name("newmark", &unused), Err(SchemeError::UnusedParameter { scheme: "newmark", parameter: "theta" }));
     }
 
     #[test]

@@ -30,12 +30,7 @@ impl State {
     /// A state at time `t` (s) with coordinates `q` and velocities `v`, and
     /// the consistent initial acceleration `a₀ = M⁻¹ Q(t, q, v)` (one
     /// residual and one solve with `c_v = c_q = 0`); `â₀ = a₀`.
-    pub fn new<S: SecondOrderSystem + ?Sized>(
-        sys: &mut S,
-        t: f64,
-        q: Vec<f64>,
-        v: Vec<f64>,
-    ) -> Result<Self, IntegrateError> {
+    pub fn new<S: SecondOrderSystem + ?Sized>(sys: &mut S, t: f64, q: Vec<f64>, v: Vec<f64>) -> Result<Self, IntegrateError> {
         let n = q.len();
         let mut state = State { t, q, v, a: vec![0.0; n], a_hat: vec![0.0; n] };
         state.check_dimensions(sys.dof())?;
@@ -51,10 +46,7 @@ impl State {
     /// Recomputes `a` (and sets `â = a`) from `(t, q, v)`. Call it after
     /// changing `q` or `v` by hand (a teleport) or before switching from
     /// Wilson-θ to another scheme.
-    pub fn recompute_acceleration<S: SecondOrderSystem + ?Sized>(
-        &mut self,
-        sys: &mut S,
-    ) -> Result<(), IntegrateError> {
+    pub fn recompute_acceleration<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S) -> Result<(), IntegrateError> {
         self.check_dimensions(sys.dof())?;
         let n = self.dof();
         let (zeros, mut r) = (vec![0.0; n], vec![0.0; n]);

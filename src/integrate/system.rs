@@ -39,14 +39,7 @@ pub trait SecondOrderSystem {
     fn dof(&self) -> usize;
 
     /// Writes `r = M(q) a − Q(t, q, v)` into `r` (length `n`).
-    fn residual(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        a: &[f64],
-        r: &mut [f64],
-    ) -> Result<(), SystemError>;
+    fn residual(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError>;
 
     /// Solves `(M + c_v·C_t + c_q·K_t) x = b` with the tangents taken at
     /// `(t, q, v, a)`. Explicit schemes call it with `c_v = c_q = 0` (then it
@@ -56,17 +49,7 @@ pub trait SecondOrderSystem {
     /// `(t, q, v, a)` just before, so an implementation may reuse what the
     /// residual computed (kinematics, loads).
     #[allow(clippy::too_many_arguments)]
-    fn solve_tangent(
-        &mut self,
-        t: f64,
-        q: &[f64],
-        v: &[f64],
-        a: &[f64],
-        c_v: f64,
-        c_q: f64,
-        b: &[f64],
-        x: &mut [f64],
-    ) -> Result<(), SystemError>;
+    fn solve_tangent(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError>;
 
     /// One Newton iteration's work: writes the right-hand side `rhs = −r(t,
     /// q, v, a)` and the correction `x` solving

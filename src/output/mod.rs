@@ -81,10 +81,7 @@ pub struct Recorder {
 impl Recorder {
     /// An empty recorder for `columns` (the names after `time`).
     pub fn new(columns: Vec<String>) -> Self {
-        Recorder {
-            columns,
-            rows: Vec::new(),
-        }
+        Recorder { columns, rows: Vec::new() }
     }
 
     /// Column names after `time`.
@@ -110,10 +107,7 @@ impl Recorder {
     /// Append a row at `time` with one value per column.
     pub fn push_row(&mut self, time: f64, values: &[f64]) -> Result<(), OutputError> {
         if values.len() != self.columns.len() {
-            return Err(OutputError::RowLength {
-                expected: self.columns.len(),
-                found: values.len(),
-            });
+            return Err(OutputError::RowLength { expected: self.columns.len(), found: values.len() });
         }
         let mut row = Vec::with_capacity(values.len() + 1);
         row.push(time);
@@ -125,9 +119,7 @@ impl Recorder {
     /// `(time, value)` of column `index` (0 = first column after `time`),
     /// all rows including non-finite values.
     pub fn series(&self, index: usize) -> impl Iterator<Item = (f64, f64)> + '_ {
-        self.rows
-            .iter()
-            .filter_map(move |r| Some((*r.first()?, *r.get(index + 1)?)))
+        self.rows.iter().filter_map(move |r| Some((*r.first()?, *r.get(index + 1)?)))
     }
 
     /// One plot panel per probe: columns `NAME.x`, `NAME.y`, `NAME.z` that
@@ -140,13 +132,7 @@ impl Recorder {
             let name = &self.columns[i];
             let stem = name.strip_suffix(".x");
             let is_vec = stem.is_some_and(|s| {
-                self.columns
-                    .get(i + 1)
-                    .is_some_and(|c| *c == format!("{s}.y"))
-                    && self
-                        .columns
-                        .get(i + 2)
-                        .is_some_and(|c| *c == format!("{s}.z"))
+                self.columns.get(i + 1).is_some_and(|c| *c == format!("{s}.y")) && self.columns.get(i + 2).is_some_and(|c| *c == format!("{s}.z"))
             });
             match stem {
                 Some(s) if is_vec => {
@@ -164,32 +150,19 @@ impl Recorder {
 
     /// Write `results.csv`: header `time,<columns>`, then one line per row.
     pub fn write_csv(&self, path: &Path) -> Result<(), OutputError> {
-        let csv_err = |source| OutputError::Csv {
-            path: path.to_path_buf(),
-            source,
-        };
+        let csv_err = |source| OutputError::Csv { path: path.to_path_buf(), source };
         let mut w = csv::Writer::from_path(path).map_err(csv_err)?;
         let header = std::iter::once("time").chain(self.columns.iter().map(String::as_str));
         w.write_record(header).map_err(csv_err)?;
         for row in &self.rows {
-            w.write_record(row.iter().map(|x| x.to_string()))
-                .map_err(csv_err)?;
+            w.write_record(row.iter().map(|x| x.to_string())).map_err(csv_err)?;
         }
-        w.flush().map_err(|source| OutputError::Io {
-            path: path.to_path_buf(),
-            source,
-        })
+        w.flush().map_err(|source| OutputError::Io { path: path.to_path_buf(), source })
     }
 
     /// Write `summary.json`: min/max/mean/final per column, the number of
     /// steps, simulated and wall-clock seconds and their ratio.
-    pub fn write_summary(
-        &self,
-        path: &Path,
-        steps: u64,
-        simulated_s: f64,
-        wall_s: f64,
-    ) -> Result<(), OutputError> {
+    pub fn write_summary(&self, path: &Path, steps: u64, simulated_s: f64, wall_s: f64) -> Result<(), OutputError> {
         summary::write(self, path, steps, simulated_s, wall_s)
     }
 
@@ -202,11 +175,7 @@ impl Recorder {
     /// Write `plot.png`: one panel per entry of `panels` (title, column
     /// indices as in [`Recorder::series`]) against time, a legend where a
     /// panel has several columns. Non-finite points are skipped.
-    pub fn write_plot<S: AsRef<str>>(
-        &self,
-        path: &Path,
-        panels: &[(S, Vec<usize>)],
-    ) -> Result<(), OutputError> {
+    pub fn write_plot<S: AsRef<str>>(&self, path: &Path, panels: &[(S, Vec<usize>)]) -> Result<(), OutputError> {
         plot::write(self, path, panels)
     }
 }

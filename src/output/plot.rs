@@ -22,14 +22,8 @@ fn register() -> bool {
 }
 
 /// Line colours of the series in a panel.
-const COLORS: [RGBColor; 6] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(148, 103, 189),
-    RGBColor(255, 127, 14),
-    RGBColor(23, 190, 207),
-];
+const COLORS: [RGBColor; 6] =
+    [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44), RGBColor(148, 103, 189), RGBColor(255, 127, 14), RGBColor(23, 190, 207)];
 
 /// Width and height of one panel, px.
 const PANEL: (u32, u32) = (900, 300);
@@ -37,21 +31,13 @@ const PANEL: (u32, u32) = (900, 300);
 /// `lo..hi` of the finite values, padded; a usable range when there are
 /// none or all are equal.
 fn range(values: impl Iterator<Item = f64>, pad_fraction: f64) -> Range<f64> {
-    let (lo, hi) = values
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
+    let (lo, hi) = values.filter(|v| v.is_finite()).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if lo > hi {
         return 0.0..1.0;
     }
     let span = hi - lo;
     if span <= 0.0 || !span.is_finite() {
-        let pad = if lo == 0.0 || !lo.is_finite() {
-            1.0
-        } else {
-            lo.abs() * 0.1
-        };
+        let pad = if lo == 0.0 || !lo.is_finite() { 1.0 } else { lo.abs() * 0.1 };
         return lo - pad..hi + pad;
     }
     lo - span * pad_fraction..hi + span * pad_fraction
@@ -85,25 +71,14 @@ fn runs(rec: &Recorder, index: usize) -> Vec<Vec<(f64, f64)>> {
     out
 }
 
-pub(crate) fn write<S: AsRef<str>>(
-    rec: &Recorder,
-    path: &Path,
-    panels: &[(S, Vec<usize>)],
-) -> Result<(), OutputError> {
+pub(crate) fn write<S: AsRef<str>>(rec: &Recorder, path: &Path, panels: &[(S, Vec<usize>)]) -> Result<(), OutputError> {
     let columns = rec.columns().len();
     for (title, cols) in panels {
         if let Some(&index) = cols.iter().find(|&&c| c >= columns) {
-            return Err(OutputError::Column {
-                panel: title.as_ref().to_string(),
-                index,
-                columns,
-            });
+            return Err(OutputError::Column { panel: title.as_ref().to_string(), index, columns });
         }
     }
-    let fail = |e: &dyn std::fmt::Display| OutputError::Plot {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    };
+    let fail = |e: &dyn std::fmt::Display| OutputError::Plot { path: path.to_path_buf(), message: e.to_string() };
     if !register() {
         return Err(fail(&"the embedded font could not be loaded"));
     }
@@ -118,10 +93,7 @@ pub(crate) fn write<S: AsRef<str>>(
 
     for (area, (title, cols)) in areas.iter().zip(panels) {
         let title = title.as_ref();
-        let y_range = range(
-            cols.iter().flat_map(|&c| rec.series(c).map(|(_, v)| v)),
-            0.05,
-        );
+        let y_range = range(cols.iter().flat_map(|&c| rec.series(c).map(|(_, v)| v)), 0.05);
         let mut chart = ChartBuilder::on(area)
             .caption(title, ("sans-serif", 18))
             .margin(10)
@@ -148,9 +120,7 @@ pub(crate) fn write<S: AsRef<str>>(
                 }
                 .map_err(|e| fail(&e))?;
                 if r == 0 {
-                    anno.label(name.clone()).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                    });
+                    anno.label(name.clone()).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
                 }
             }
         }
@@ -176,10 +146,7 @@ mod tests {
         assert_eq!(range([2.0, 2.0].into_iter(), 0.05), 1.8..2.2);
         assert_eq!(range([0.0].into_iter(), 0.05), -1.0..1.0);
         assert_eq!(range([f64::NAN].into_iter(), 0.05), 0.0..1.0);
-        assert_eq!(
-            range([0.0, 10.0, f64::INFINITY].into_iter(), 0.0),
-            0.0..10.0
-        );
+        assert_eq!(range([0.0, 10.0, f64::INFINITY].into_iter(), 0.0), 0.0..10.0);
         assert_eq!(tick(2.50), "2.5");
         assert_eq!(tick(2e7), "2.00e7");
     }

@@ -21,8 +21,7 @@ pub struct ColumnStats {
 
 /// Statistics over `values`, skipping non-finite ones except for `last`.
 pub(crate) fn stats(values: impl Iterator<Item = f64>) -> ColumnStats {
-    let (mut min, mut max, mut sum, mut n, mut last) =
-        (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize, f64::NAN);
+    let (mut min, mut max, mut sum, mut n, mut last) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0usize, f64::NAN);
     for v in values {
         last = v;
         if v.is_finite() {
@@ -33,19 +32,9 @@ pub(crate) fn stats(values: impl Iterator<Item = f64>) -> ColumnStats {
         }
     }
     if n == 0 {
-        return ColumnStats {
-            min: f64::NAN,
-            max: f64::NAN,
-            mean: f64::NAN,
-            last,
-        };
+        return ColumnStats { min: f64::NAN, max: f64::NAN, mean: f64::NAN, last };
     }
-    ColumnStats {
-        min,
-        max,
-        mean: sum / n as f64,
-        last,
-    }
+    ColumnStats { min, max, mean: sum / n as f64, last }
 }
 
 /// A JSON number, or `null` when not finite.
@@ -53,20 +42,11 @@ fn num(x: f64) -> Value {
     serde_json::Number::from_f64(x).map_or(Value::Null, Value::Number)
 }
 
-pub(crate) fn write(
-    rec: &Recorder,
-    path: &Path,
-    steps: u64,
-    simulated_s: f64,
-    wall_s: f64,
-) -> Result<(), OutputError> {
+pub(crate) fn write(rec: &Recorder, path: &Path, steps: u64, simulated_s: f64, wall_s: f64) -> Result<(), OutputError> {
     let mut probes = Map::new();
     for (i, name) in rec.columns().iter().enumerate() {
         let s = rec.stats(i);
-        probes.insert(
-            name.clone(),
-            json!({ "min": num(s.min), "max": num(s.max), "mean": num(s.mean), "final": num(s.last) }),
-        );
+        probes.insert(name.clone(), json!({ "min": num(s.min), "max": num(s.max), "mean": num(s.mean), "final": num(s.last) }));
     }
     let doc = json!({
         "probes": Value::Object(probes),
@@ -75,15 +55,9 @@ pub(crate) fn write(
         "wall_s": num(wall_s),
         "real_time_factor": num(simulated_s / wall_s),
     });
-    let mut text = serde_json::to_string_pretty(&doc).map_err(|source| OutputError::Json {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let mut text = serde_json::to_string_pretty(&doc).map_err(|source| OutputError::Json { path: path.to_path_buf(), source })?;
     text.push('\n');
-    std::fs::write(path, text).map_err(|source| OutputError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    std::fs::write(path, text).map_err(|source| OutputError::Io { path: path.to_path_buf(), source })
 }
 
 #[cfg(test)]

@@ -120,10 +120,7 @@ impl Plugin for CablePlugin {
         app.insert_resource(CableSettings { substeps: self.substeps.max(1) });
         app.register_type::<CableState>().register_type::<CableRopeOf>();
         app.add_message::<CableDiverged>();
-        app.configure_sets(
-            FixedUpdate,
-            (CableSystems::Init, CableSystems::Step).chain().after(PhysicsSet::SyncBackend).before(PhysicsSet::StepSimulation),
-        );
+        app.configure_sets(FixedUpdate, (CableSystems::Init, CableSystems::Step).chain().after(PhysicsSet::SyncBackend).before(PhysicsSet::StepSimulation));
         app.configure_sets(FixedUpdate, CableSystems::WriteBodies.after(PhysicsSet::StepSimulation).before(PhysicsSet::Writeback));
         app.configure_sets(FixedUpdate, CableSystems::Readout.after(PhysicsSet::Writeback));
         app.add_systems(

@@ -10,34 +10,14 @@ use super::validate::{fmt_num, fmt_vec, list, Ctx, Res, Rule};
 
 /// Orientation from XYZ Euler angles in degrees: R = Rx·Ry·Rz.
 pub(crate) fn euler_xyz_deg(deg: DVec3) -> DQuat {
-    DQuat::from_euler(
-        EulerRot::XYZ,
-        deg.x.to_radians(),
-        deg.y.to_radians(),
-        deg.z.to_radians(),
-    )
+    DQuat::from_euler(EulerRot::XYZ, deg.x.to_radians(), deg.y.to_radians(), deg.z.to_radians())
 }
 
 /// Error "unknown body" listing the known ones.
-pub(crate) fn unknown_body(
-    ctx: &Ctx<'_>,
-    v: &S<String>,
-    owner: &str,
-    bodies: &[Body],
-) -> super::ScenarioError {
+pub(crate) fn unknown_body(ctx: &Ctx<'_>, v: &S<String>, owner: &str, bodies: &[Body]) -> super::ScenarioError {
     let known: Vec<&str> = bodies.iter().map(|b| b.name.as_str()).collect();
-    let known = if known.is_empty() {
-        "no bodies are defined".to_string()
-    } else {
-        format!("known bodies: {}", list(&known))
-    };
-    ctx.err(
-        v.span(),
-        format!(
-            "{owner}: unknown body `{}` ({known}; `world` is the ground)",
-            v.get_ref()
-        ),
-    )
+    let known = if known.is_empty() { "no bodies are defined".to_string() } else { format!("known bodies: {}", list(&known)) };
+    ctx.err(v.span(), format!("{owner}: unknown body `{}` ({known}; `world` is the ground)", v.get_ref()))
 }
 
 /// All `[[body]]` tables.
@@ -49,10 +29,7 @@ pub(crate) fn bodies(ctx: &Ctx<'_>, raw: &[S<RawBody>]) -> Res<Vec<Body>> {
 fn body(ctx: &Ctx<'_>, raw: &S<RawBody>, seen: &mut HashMap<String, super::Location>) -> Res<Body> {
     let r = raw.get_ref();
     if r.name.get_ref() == "world" {
-        return Err(ctx.err(
-            r.name.span(),
-            "`world` is reserved for the ground and cannot be a body name",
-        ));
+        return Err(ctx.err(r.name.span(), "`world` is reserved for the ground and cannot be a body name"));
     }
     let name = ctx.name(&r.name, "body", seen)?;
     let o = format!("body `{name}`");
@@ -65,13 +42,7 @@ fn body(ctx: &Ctx<'_>, raw: &S<RawBody>, seen: &mut HashMap<String, super::Locat
     let shape = shape(ctx, raw, o)?;
     let mass = match kind {
         BodyKind::Dynamic => {
-            let m = ctx.need(
-                &r.mass,
-                raw.span(),
-                o,
-                "mass",
-                " (required for a dynamic body)",
-            )?;
+            let m = ctx.need(&r.mass, raw.span(), o, "mass", " (required for a dynamic body)")?;
             Some(ctx.check(m, o, "mass", Rule::Positive, "kg")?)
         }
         _ => {
@@ -86,12 +57,7 @@ fn body(ctx: &Ctx<'_>, raw: &S<RawBody>, seen: &mut HashMap<String, super::Locat
     }
     let motion = match &r.motion {
         Some(m) if kind == BodyKind::Kinematic => Some(motion(ctx, m, o)?),
-        Some(m) => {
-            return Err(ctx.err(
-                m.span(),
-                format!("{o}: `motion` is only allowed for kinematic bodies"),
-            ))
-        }
+        Some(m) => return Err(ctx.err(m.span(), format!("{o}: `motion` is only allowed for kinematic bodies"))),
         None => None,
     };
     let mut position = ctx.vec3_or(&r.position, o, "position", "m", DVec3::ZERO)?;
@@ -99,26 +65,15 @@ fn body(ctx: &Ctx<'_>, raw: &S<RawBody>, seen: &mut HashMap<String, super::Locat
         let p0 = points.first().map_or(position, |p| p.1);
         match &r.position {
             Some(p) if position.distance(p0) > 1e-3 => {
-                return Err(ctx.err(
-                    p.span(),
-                    format!(
-                        "{o}: `position` {} differs from the motion table's position at t = 0, {}",
-                        fmt_vec(position),
-                        fmt_vec(p0)
-                    ),
-                ))
+                return Err(
+                    ctx.err(p.span(), format!("{o}: `position` {} differs from the motion table's position at t = 0, {}", fmt_vec(position), fmt_vec(p0)))
+                )
             }
             _ => position = p0,
         }
     }
     let rotation = ctx.vec3_or(&r.rotation, o, "rotation", "degrees", DVec3::ZERO)?;
-    let angular = ctx.vec3_or(
-        &r.angular_velocity,
-        o,
-        "angular_velocity",
-        "deg/s",
-        DVec3::ZERO,
-    )?;
+    let angular = ctx.vec3_or(&r.angular_velocity, o, "angular_velocity", "deg/s", DVec3::ZERO)?;
     Ok(Body {
         name,
         kind,
@@ -126,24 +81,11 @@ fn body(ctx: &Ctx<'_>, raw: &S<RawBody>, seen: &mut HashMap<String, super::Locat
         mass,
         position,
         rotation: euler_xyz_deg(rotation),
-        linear_velocity: ctx.vec3_or(
-            &r.linear_velocity,
-            o,
-            "linear_velocity",
-            "m/s",
-            DVec3::ZERO,
-        )?,
+        linear_velocity: ctx.vec3_or(&r.linear_velocity, o, "linear_velocity", "m/s", DVec3::ZERO)?,
         angular_velocity: angular * std::f64::consts::PI / 180.0,
         friction: ctx.check_or(&r.friction, o, "friction", Rule::NonNegative, "", 0.5)?,
         wind_area: ctx.check_or(&r.wind_area, o, "wind_area", Rule::NonNegative, "m²", 0.0)?,
-        wind_coefficient: ctx.check_or(
-            &r.wind_coefficient,
-            o,
-            "wind_coefficient",
-            Rule::NonNegative,
-            "",
-            0.0,
-        )?,
+        wind_coefficient: ctx.check_or(&r.wind_coefficient, o, "wind_coefficient", Rule::NonNegative, "", 0.0)?,
         motion,
         location: ctx.loc(raw.span()),
     })
@@ -152,12 +94,7 @@ fn body(ctx: &Ctx<'_>, raw: &S<RawBody>, seen: &mut HashMap<String, super::Locat
 fn shape(ctx: &Ctx<'_>, raw: &S<RawBody>, o: &str) -> Res<Shape> {
     let r = raw.get_ref();
     let at = raw.span();
-    let shape = ctx.choice(
-        &r.shape,
-        o,
-        "shape",
-        &["ball", "cuboid", "capsule", "cylinder"],
-    )?;
+    let shape = ctx.choice(&r.shape, o, "shape", &["ball", "cuboid", "capsule", "cylinder"])?;
     let why = format!("does not apply to a `{shape}` shape");
     let radius = |why_missing: &str| -> Res<f64> {
         let v = ctx.need(&r.radius, at.clone(), o, "radius", why_missing)?;
@@ -167,29 +104,15 @@ fn shape(ctx: &Ctx<'_>, raw: &S<RawBody>, o: &str) -> Res<Shape> {
         "ball" => {
             ctx.forbid(&r.half_extents, o, "half_extents", &why)?;
             ctx.forbid(&r.half_height, o, "half_height", &why)?;
-            Shape::Ball {
-                radius: radius(" (required for a ball)")?,
-            }
+            Shape::Ball { radius: radius(" (required for a ball)")? }
         }
         "cuboid" => {
             ctx.forbid(&r.radius, o, "radius", &why)?;
             ctx.forbid(&r.half_height, o, "half_height", &why)?;
-            let v = ctx.need(
-                &r.half_extents,
-                at.clone(),
-                o,
-                "half_extents",
-                " (required for a cuboid)",
-            )?;
+            let v = ctx.need(&r.half_extents, at.clone(), o, "half_extents", " (required for a cuboid)")?;
             let h = ctx.vec3(v, o, "half_extents", "m")?;
             if h.min_element() <= 0.0 {
-                return Err(ctx.err(
-                    v.span(),
-                    format!(
-                        "{o}: `half_extents` must all be greater than 0 m, found {}",
-                        fmt_vec(h)
-                    ),
-                ));
+                return Err(ctx.err(v.span(), format!("{o}: `half_extents` must all be greater than 0 m, found {}", fmt_vec(h))));
             }
             Shape::Cuboid { half_extents: h }
         }
@@ -200,15 +123,9 @@ fn shape(ctx: &Ctx<'_>, raw: &S<RawBody>, o: &str) -> Res<Shape> {
             let v = ctx.need(&r.half_height, at.clone(), o, "half_height", &missing)?;
             let half_height = ctx.check(v, o, "half_height", Rule::Positive, "m")?;
             if shape == "capsule" {
-                Shape::Capsule {
-                    radius,
-                    half_height,
-                }
+                Shape::Capsule { radius, half_height }
             } else {
-                Shape::Cylinder {
-                    radius,
-                    half_height,
-                }
+                Shape::Cylinder { radius, half_height }
             }
         }
     })
@@ -228,13 +145,7 @@ fn motion(ctx: &Ctx<'_>, raw: &S<RawMotion>, o: &str) -> Res<Motion> {
         "sine" => {
             let why = "does not apply to a `sine` motion";
             ctx.forbid(&r.points, o, "points", why)?;
-            let a = ctx.need(
-                &r.amplitude,
-                at.clone(),
-                o,
-                "amplitude",
-                " (required for a sine)",
-            )?;
+            let a = ctx.need(&r.amplitude, at.clone(), o, "amplitude", " (required for a sine)")?;
             let p = ctx.need(&r.period, at.clone(), o, "period", " (required for a sine)")?;
             Ok(Motion::Sine {
                 amplitude: ctx.vec3(a, o, "amplitude", "m")?,
@@ -251,15 +162,10 @@ fn motion(ctx: &Ctx<'_>, raw: &S<RawMotion>, o: &str) -> Res<Motion> {
             let a = ctx.need(&r.axis, at.clone(), o, "axis", " (required for a spin)")?;
             let axis = ctx.vec3(a, o, "axis", "world frame")?;
             let Some(axis) = axis.try_normalize().filter(|_| axis.length() >= 1e-9) else {
-                return Err(ctx.err(
-                    a.span(),
-                    format!("{o}: `axis` must be a nonzero direction, found {}", fmt_vec(axis)),
-                ));
+                return Err(ctx.err(a.span(), format!("{o}: `axis` must be a nonzero direction, found {}", fmt_vec(axis))));
             };
             let rate = ctx.need(&r.rate, at, o, "rate", " (required for a spin)")?;
-            let points = ctx.table(rate, o, "rate", "[[t, rate], ...] (s, deg/s)", |d| {
-                Ok(ctx.datum_num(d, o, "rate", "rate")?.to_radians())
-            })?;
+            let points = ctx.table(rate, o, "rate", "[[t, rate], ...] (s, deg/s)", |d| Ok(ctx.datum_num(d, o, "rate", "rate")?.to_radians()))?;
             Ok(Motion::Spin { axis, rate: TimeSeries { points } })
         }
         _ => {
@@ -268,9 +174,7 @@ fn motion(ctx: &Ctx<'_>, raw: &S<RawMotion>, o: &str) -> Res<Motion> {
             ctx.forbid(&r.period, o, "period", why)?;
             ctx.forbid(&r.phase, o, "phase", why)?;
             let pts = ctx.need(&r.points, at, o, "points", " (required for a table)")?;
-            let points = ctx.table(pts, o, "points", "[[t, [x, y, z]], ...] (s, m)", |d| {
-                ctx.datum_vec3(d, o, "points")
-            })?;
+            let points = ctx.table(pts, o, "points", "[[t, [x, y, z]], ...] (s, m)", |d| ctx.datum_vec3(d, o, "points"))?;
             Ok(Motion::Table { points })
         }
     }
@@ -279,27 +183,15 @@ fn motion(ctx: &Ctx<'_>, raw: &S<RawMotion>, o: &str) -> Res<Motion> {
 /// All `[[joint]]` tables.
 pub(crate) fn joints(ctx: &Ctx<'_>, raw: &[S<RawJoint>], bodies: &[Body]) -> Res<Vec<Joint>> {
     let mut seen = HashMap::new();
-    raw.iter()
-        .map(|j| joint(ctx, j, bodies, &mut seen))
-        .collect()
+    raw.iter().map(|j| joint(ctx, j, bodies, &mut seen)).collect()
 }
 
-fn joint(
-    ctx: &Ctx<'_>,
-    raw: &S<RawJoint>,
-    bodies: &[Body],
-    seen: &mut HashMap<String, super::Location>,
-) -> Res<Joint> {
+fn joint(ctx: &Ctx<'_>, raw: &S<RawJoint>, bodies: &[Body], seen: &mut HashMap<String, super::Location>) -> Res<Joint> {
     let r = raw.get_ref();
     let name = ctx.name(&r.name, "joint", seen)?;
     let o = format!("joint `{name}`");
     let o = o.as_str();
-    let kind = match ctx.choice(
-        &r.kind,
-        o,
-        "joint type",
-        &["fixed", "revolute", "prismatic", "spherical"],
-    )? {
+    let kind = match ctx.choice(&r.kind, o, "joint type", &["fixed", "revolute", "prismatic", "spherical"])? {
         "fixed" => JointKind::Fixed,
         "revolute" => JointKind::Revolute,
         "prismatic" => JointKind::Prismatic,
@@ -311,32 +203,14 @@ fn joint(
         }
     }
     if r.body1.get_ref() == r.body2.get_ref() {
-        return Err(ctx.err(
-            r.body2.span(),
-            format!(
-                "{o}: `body1` and `body2` are both `{}`; a joint needs two different bodies",
-                r.body2.get_ref()
-            ),
-        ));
+        return Err(ctx.err(r.body2.span(), format!("{o}: `body1` and `body2` are both `{}`; a joint needs two different bodies", r.body2.get_ref())));
     }
     let has_axis = matches!(kind, JointKind::Revolute | JointKind::Prismatic);
     let (axis, limits, drive) = if has_axis {
-        let v = ctx.need(
-            &r.axis,
-            raw.span(),
-            o,
-            "axis",
-            " (required for revolute and prismatic joints)",
-        )?;
+        let v = ctx.need(&r.axis, raw.span(), o, "axis", " (required for revolute and prismatic joints)")?;
         let a = ctx.vec3(v, o, "axis", "body1 frame")?;
         let Some(a) = a.try_normalize().filter(|_| a.length() >= 1e-9) else {
-            return Err(ctx.err(
-                v.span(),
-                format!(
-                    "{o}: `axis` must be a nonzero direction, found {}",
-                    fmt_vec(a)
-                ),
-            ));
+            return Err(ctx.err(v.span(), format!("{o}: `axis` must be a nonzero direction, found {}", fmt_vec(a))));
         };
         let revolute = kind == JointKind::Revolute;
         let limits = match &r.limits {
@@ -344,41 +218,17 @@ fn joint(
                 let unit = if revolute { "degrees" } else { "m" };
                 let items = l.get_ref();
                 if items.len() != 2 {
-                    return Err(ctx.err(
-                        l.span(),
-                        format!(
-                            "{o}: `limits` must be [min, max] ({unit}), found {} numbers",
-                            items.len()
-                        ),
-                    ));
+                    return Err(ctx.err(l.span(), format!("{o}: `limits` must be [min, max] ({unit}), found {} numbers", items.len())));
                 }
-                let (lo, hi) = (
-                    ctx.num(&items[0], o, "limits")?,
-                    ctx.num(&items[1], o, "limits")?,
-                );
+                let (lo, hi) = (ctx.num(&items[0], o, "limits")?, ctx.num(&items[1], o, "limits")?);
                 if lo >= hi {
-                    return Err(ctx.err(
-                        l.span(),
-                        format!(
-                            "{o}: `limits` must have min < max, found [{}, {}]",
-                            fmt_num(lo),
-                            fmt_num(hi)
-                        ),
-                    ));
+                    return Err(ctx.err(l.span(), format!("{o}: `limits` must have min < max, found [{}, {}]", fmt_num(lo), fmt_num(hi))));
                 }
-                Some(if revolute {
-                    [lo.to_radians(), hi.to_radians()]
-                } else {
-                    [lo, hi]
-                })
+                Some(if revolute { [lo.to_radians(), hi.to_radians()] } else { [lo, hi] })
             }
             None => None,
         };
-        let drive = r
-            .drive
-            .as_ref()
-            .map(|d| drive(ctx, d, o, revolute))
-            .transpose()?;
+        let drive = r.drive.as_ref().map(|d| drive(ctx, d, o, revolute)).transpose()?;
         (Some(a), limits, drive)
     } else {
         let why = "only applies to revolute and prismatic joints";
@@ -406,59 +256,21 @@ fn drive(ctx: &Ctx<'_>, raw: &S<RawDrive>, o: &str, revolute: bool) -> Res<Drive
     let o = &format!("{o}: drive");
     match (&r.force, &r.velocity) {
         (Some(f), None) => {
-            ctx.forbid(
-                &r.max_force,
-                o,
-                "max_force",
-                "only applies to a `velocity` drive",
-            )?;
-            let shape = if revolute {
-                "[[t, torque], ...] (s, N·m)"
-            } else {
-                "[[t, F], ...] (s, N)"
-            };
-            let points = ctx.table(f, o, "force", shape, |d| {
-                ctx.datum_num(d, o, "force", "force")
-            })?;
-            Ok(Drive::Force {
-                force: TimeSeries { points },
-            })
+            ctx.forbid(&r.max_force, o, "max_force", "only applies to a `velocity` drive")?;
+            let shape = if revolute { "[[t, torque], ...] (s, N·m)" } else { "[[t, F], ...] (s, N)" };
+            let points = ctx.table(f, o, "force", shape, |d| ctx.datum_num(d, o, "force", "force"))?;
+            Ok(Drive::Force { force: TimeSeries { points } })
         }
         (None, Some(v)) => {
-            let shape = if revolute {
-                "[[t, v], ...] (s, deg/s)"
-            } else {
-                "[[t, v], ...] (s, m/s)"
-            };
-            let scale = if revolute {
-                std::f64::consts::PI / 180.0
-            } else {
-                1.0
-            };
-            let points = ctx.table(v, o, "velocity", shape, |d| {
-                Ok(ctx.datum_num(d, o, "velocity", "velocity")? * scale)
-            })?;
-            let m = ctx.need(
-                &r.max_force,
-                raw.span(),
-                o,
-                "max_force",
-                " (required for a `velocity` drive)",
-            )?;
+            let shape = if revolute { "[[t, v], ...] (s, deg/s)" } else { "[[t, v], ...] (s, m/s)" };
+            let scale = if revolute { std::f64::consts::PI / 180.0 } else { 1.0 };
+            let points = ctx.table(v, o, "velocity", shape, |d| Ok(ctx.datum_num(d, o, "velocity", "velocity")? * scale))?;
+            let m = ctx.need(&r.max_force, raw.span(), o, "max_force", " (required for a `velocity` drive)")?;
             let unit = if revolute { "N·m" } else { "N" };
-            Ok(Drive::Velocity {
-                velocity: TimeSeries { points },
-                max_force: ctx.check(m, o, "max_force", Rule::Positive, unit)?,
-            })
+            Ok(Drive::Velocity { velocity: TimeSeries { points }, max_force: ctx.check(m, o, "max_force", Rule::Positive, unit)? })
         }
-        (Some(_), Some(v)) => Err(ctx.err(
-            v.span(),
-            format!("{o}: give either `force` or `velocity`, not both"),
-        )),
-        (None, None) => Err(ctx.err(
-            raw.span(),
-            format!("{o}: needs `force = [[t, F], ...]` or `velocity = [[t, v], ...]`"),
-        )),
+        (Some(_), Some(v)) => Err(ctx.err(v.span(), format!("{o}: give either `force` or `velocity`, not both"))),
+        (None, None) => Err(ctx.err(raw.span(), format!("{o}: needs `force = [[t, F], ...]` or `velocity = [[t, v], ...]`"))),
     }
 }
 
@@ -470,9 +282,7 @@ mod tests {
     fn scenario_euler_xyz_is_rx_ry_rz() {
         let (a, b, c) = (30.0_f64, -50.0_f64, 75.0_f64);
         let q = euler_xyz_deg(DVec3::new(a, b, c));
-        let r = DQuat::from_rotation_x(a.to_radians())
-            * DQuat::from_rotation_y(b.to_radians())
-            * DQuat::from_rotation_z(c.to_radians());
+        let r = DQuat::from_rotation_x(a.to_radians()) * DQuat::from_rotation_y(b.to_radians()) * DQuat::from_rotation_z(c.to_radians());
         assert!(q.dot(r).abs() > 1.0 - 1e-12);
     }
 }

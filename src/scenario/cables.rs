@@ -18,70 +18,40 @@ const COINCIDE: f64 = 1e-3;
 /// All `[[cable]]` tables.
 pub(crate) fn cables(ctx: &Ctx<'_>, raw: &[S<RawCable>], bodies: &[Body]) -> Res<Vec<Cable>> {
     let mut seen = HashMap::new();
-    raw.iter()
-        .map(|c| cable(ctx, c, bodies, &mut seen))
-        .collect()
+    raw.iter().map(|c| cable(ctx, c, bodies, &mut seen)).collect()
 }
 
-fn cable(
-    ctx: &Ctx<'_>,
-    raw: &S<RawCable>,
-    bodies: &[Body],
-    seen: &mut HashMap<String, Location>,
-) -> Res<Cable> {
+fn cable(ctx: &Ctx<'_>, raw: &S<RawCable>, bodies: &[Body], seen: &mut HashMap<String, Location>) -> Res<Cable> {
     let r = raw.get_ref();
     let name = ctx.name(&r.name, "cable", seen)?;
     let o = format!("cable `{name}`");
     let o = o.as_str();
     let length = ctx.check(&r.length, o, "length", Rule::Positive, "m")?;
     let n = *r.segments.get_ref();
-    let segments = u32::try_from(n).ok().filter(|n| *n >= 1).ok_or_else(|| {
-        ctx.err(
-            r.segments.span(),
-            format!("{o}: `segments` must be at least 1, found {n}"),
-        )
-    })?;
+    let segments =
+        u32::try_from(n).ok().filter(|n| *n >= 1).ok_or_else(|| ctx.err(r.segments.span(), format!("{o}: `segments` must be at least 1, found {n}")))?;
     let diameter = ctx.check(&r.diameter, o, "diameter", Rule::Positive, "m")?;
     let section = match &r.material {
-        Some(m) => Some(preset(m.get_ref(), diameter).ok_or_else(|| {
-            ctx.err(
-                m.span(),
-                format!(
-                    "{o}: unknown material `{}`; valid presets: {}",
-                    m.get_ref(),
-                    list(PRESET_NAMES)
-                ),
-            )
-        })?),
+        Some(m) => Some(
+            preset(m.get_ref(), diameter)
+                .ok_or_else(|| ctx.err(m.span(), format!("{o}: unknown material `{}`; valid presets: {}", m.get_ref(), list(PRESET_NAMES))))?,
+        ),
         None => None,
     };
     // Explicit fields override the preset; without a preset they are required.
-    let prop =
-        |v: &Option<S<f64>>, field: &str, unit: &str, from_preset: Option<f64>| -> Res<f64> {
-            match (v, from_preset) {
-                (Some(v), _) => ctx.check(v, o, field, Rule::Positive, unit),
-                (None, Some(x)) => Ok(x),
-                (None, None) => Err(ctx.err(
-                    raw.span(),
-                    format!("{o}: missing field `{field}` (give it, or a `material` preset)"),
-                )),
-            }
-        };
-    let linear_density = prop(
-        &r.linear_density,
-        "linear_density",
-        "kg/m",
-        section.map(|s| s.linear_density),
-    )?;
+    let prop = |v: &Option<S<f64>>, field: &str, unit: &str, from_preset: Option<f64>| -> Res<f64> {
+        match (v, from_preset) {
+            (Some(v), _) => ctx.check(v, o, field, Rule::Positive, unit),
+            (None, Some(x)) => Ok(x),
+            (None, None) => Err(ctx.err(raw.span(), format!("{o}: missing field `{field}` (give it, or a `material` preset)"))),
+        }
+    };
+    let linear_density = prop(&r.linear_density, "linear_density", "kg/m", section.map(|s| s.linear_density))?;
     let ea = prop(&r.ea, "ea", "N", section.map(|s| s.ea))?;
     let ei = prop(&r.ei, "ei", "N·m²", section.map(|s| s.ei))?;
     let gj = prop(&r.gj, "gj", "N·m²", section.map(|s| s.gj))?;
     let ei2 = prop(&r.ei2, "ei2", "N·m²", Some(ei))?;
-    let shear_stiffness = r
-        .shear_stiffness
-        .as_ref()
-        .map(|v| ctx.check(v, o, "shear_stiffness", Rule::Positive, "N"))
-        .transpose()?;
+    let shear_stiffness = r.shear_stiffness.as_ref().map(|v| ctx.check(v, o, "shear_stiffness", Rule::Positive, "N")).transpose()?;
     let start = end(ctx, &r.start, o, "start", bodies)?;
     let end_ = end(ctx, &r.end, o, "end", bodies)?;
     let path = path(ctx, raw, o, length, &start, &end_, bodies)?;
@@ -100,14 +70,7 @@ fn cable(
         damping: ctx.check_or(&r.damping, o, "damping", Rule::NonNegative, "s", 0.0)?,
         friction: ctx.check_or(&r.friction, o, "friction", Rule::NonNegative, "", 0.3)?,
         drag_normal: ctx.check_or(&r.drag_normal, o, "drag_normal", Rule::NonNegative, "", 1.2)?,
-        drag_tangential: ctx.check_or(
-            &r.drag_tangential,
-            o,
-            "drag_tangential",
-            Rule::NonNegative,
-            "",
-            0.008,
-        )?,
+        drag_tangential: ctx.check_or(&r.drag_tangential, o, "drag_tangential", Rule::NonNegative, "", 0.008)?,
         added_mass: ctx.check_or(&r.added_mass, o, "added_mass", Rule::NonNegative, "", 1.0)?,
         start,
         end: end_,
@@ -130,32 +93,15 @@ fn loads(ctx: &Ctx<'_>, r: &RawCable, o: &str, length: f64) -> Res<Vec<PointLoad
         let o = &format!("{o}: load {}", i + 1);
         let s = ctx.check(&l.s, o, "s", Rule::NonNegative, "m")?;
         if s > length {
-            return Err(ctx.err(
-                l.s.span(),
-                format!(
-                    "{o}: `s` must be at most the cable's `length` {} m, found {}",
-                    fmt_num(length),
-                    fmt_num(s)
-                ),
-            ));
+            return Err(ctx.err(l.s.span(), format!("{o}: `s` must be at most the cable's `length` {} m, found {}", fmt_num(length), fmt_num(s))));
         }
-        out.push(PointLoad {
-            s,
-            force: ctx.vec3(&l.force, o, "force", "N")?,
-            moment: ctx.vec3_or(&l.moment, o, "moment", "N·m", DVec3::ZERO)?,
-        });
+        out.push(PointLoad { s, force: ctx.vec3(&l.force, o, "force", "N")?, moment: ctx.vec3_or(&l.moment, o, "moment", "N·m", DVec3::ZERO)? });
     }
     Ok(out)
 }
 
 /// A `start`/`end` table.
-fn end(
-    ctx: &Ctx<'_>,
-    raw: &Option<S<RawEnd>>,
-    o: &str,
-    field: &str,
-    bodies: &[Body],
-) -> Res<CableEnd> {
+fn end(ctx: &Ctx<'_>, raw: &Option<S<RawEnd>>, o: &str, field: &str, bodies: &[Body]) -> Res<CableEnd> {
     let Some(raw) = raw else {
         return Ok(CableEnd::Free);
     };
@@ -178,10 +124,9 @@ fn end(
             Ok(CableEnd::World { point: ctx.vec3(w, o, "world", "m")?, clamp })
         }
         (Some(_), Some(w)) => Err(ctx.err(w.span(), format!("{o}: give either `body` or `world`, not both"))),
-        (None, None) => Err(ctx.err(
-            raw.span(),
-            format!("{o}: needs `body = NAME, anchor = [x, y, z]` or `world = [x, y, z]` (omit `{field}` for a free end)"),
-        )),
+        (None, None) => {
+            Err(ctx.err(raw.span(), format!("{o}: needs `body = NAME, anchor = [x, y, z]` or `world = [x, y, z]` (omit `{field}` for a free end)")))
+        }
     }
 }
 
@@ -190,91 +135,45 @@ fn end_point(e: &CableEnd, bodies: &[Body]) -> Option<DVec3> {
     match e {
         CableEnd::Free => None,
         CableEnd::World { point, .. } => Some(*point),
-        CableEnd::Body { body, anchor, .. } => bodies
-            .iter()
-            .find(|b| &b.name == body)
-            .map(|b| b.world_point(*anchor)),
+        CableEnd::Body { body, anchor, .. } => bodies.iter().find(|b| &b.name == body).map(|b| b.world_point(*anchor)),
     }
 }
 
 /// The initial centerline: the file's `path` checked against the ends, or
 /// the default straight line.
-fn path(
-    ctx: &Ctx<'_>,
-    raw: &S<RawCable>,
-    o: &str,
-    length: f64,
-    start: &CableEnd,
-    end: &CableEnd,
-    bodies: &[Body],
-) -> Res<Vec<DVec3>> {
+fn path(ctx: &Ctx<'_>, raw: &S<RawCable>, o: &str, length: f64, start: &CableEnd, end: &CableEnd, bodies: &[Body]) -> Res<Vec<DVec3>> {
     let r = raw.get_ref();
     let (p_start, p_end) = (end_point(start, bodies), end_point(end, bodies));
     let Some(path) = &r.path else {
         let Some(a) = p_start else {
-            return Err(ctx.err(
-                raw.span(),
-                format!("{o}: a cable with a free `start` needs a `path` [[x, y, z], ...]"),
-            ));
+            return Err(ctx.err(raw.span(), format!("{o}: a cable with a free `start` needs a `path` [[x, y, z], ...]")));
         };
         let path = match p_end {
             None => vec![a, a - DVec3::Y * length],
             Some(b) if a.distance(b) > COINCIDE => vec![a, b],
-            Some(b) => {
-                return Err(ctx.err(
-                    raw.span(),
-                    format!(
-                        "{o}: the start and end points coincide at {}; give a `path`",
-                        fmt_vec(b)
-                    ),
-                ))
-            }
+            Some(b) => return Err(ctx.err(raw.span(), format!("{o}: the start and end points coincide at {}; give a `path`", fmt_vec(b)))),
         };
         if !path.iter().all(|p| p.is_finite()) {
-            return Err(ctx.err(
-                raw.span(),
-                format!(
-                    "{o}: the default path {} to {} is not finite (numbers too large)",
-                    fmt_vec(path[0]),
-                    fmt_vec(path[1])
-                ),
-            ));
+            return Err(ctx.err(raw.span(), format!("{o}: the default path {} to {} is not finite (numbers too large)", fmt_vec(path[0]), fmt_vec(path[1]))));
         }
         return Ok(path);
     };
     let items = path.get_ref();
     if items.len() < 2 {
-        return Err(ctx.err(
-            path.span(),
-            format!(
-                "{o}: `path` must have at least 2 points, found {}",
-                items.len()
-            ),
-        ));
+        return Err(ctx.err(path.span(), format!("{o}: `path` must have at least 2 points, found {}", items.len())));
     }
     let mut points = Vec::with_capacity(items.len());
     for (i, p) in items.iter().enumerate() {
         let x = ctx.vec3(p, o, "path", "m")?;
         if let Some(prev) = points.last() {
             if x == *prev {
-                return Err(ctx.err(
-                    p.span(),
-                    format!(
-                        "{o}: `path` points {} and {} coincide at {}",
-                        i,
-                        i + 1,
-                        fmt_vec(x)
-                    ),
-                ));
+                return Err(ctx.err(p.span(), format!("{o}: `path` points {} and {} coincide at {}", i, i + 1, fmt_vec(x))));
             }
         }
         points.push(x);
     }
     let spans: Vec<Range<usize>> = items.iter().map(|p| p.span()).collect();
-    let ends = [
-        ("first", "start", p_start, points.first(), spans.first()),
-        ("last", "end", p_end, points.last(), spans.last()),
-    ];
+    let ends = [("first", "start", p_start, points.first(), spans.first()), ("last", "end", p_end, points.last(), spans.last())];
     for (which, field, attach, point, span) in ends {
         if let (Some(a), Some(p), Some(span)) = (attach, point, span) {
             let d = a.distance(*p);
@@ -303,13 +202,9 @@ pub(crate) fn winches(ctx: &Ctx<'_>, raw: &[S<RawWinch>], cables: &[Cable]) -> R
         let winch = winch(ctx, w, cables, &mut seen)?;
         let key = (winch.cable.clone(), winch.at == CableSide::Start);
         if let Some(other) = ends.get(&key) {
-            return Err(ctx.err(
-                w.get_ref().at.span(),
-                format!(
-                    "winch `{}`: that end of cable `{}` is already wound on winch `{other}`",
-                    winch.name, winch.cable
-                ),
-            ));
+            return Err(
+                ctx.err(w.get_ref().at.span(), format!("winch `{}`: that end of cable `{}` is already wound on winch `{other}`", winch.name, winch.cable))
+            );
         }
         ends.insert(key, winch.name.clone());
         out.push(winch);
@@ -317,84 +212,45 @@ pub(crate) fn winches(ctx: &Ctx<'_>, raw: &[S<RawWinch>], cables: &[Cable]) -> R
     Ok(out)
 }
 
-fn winch(
-    ctx: &Ctx<'_>,
-    raw: &S<RawWinch>,
-    cables: &[Cable],
-    seen: &mut HashMap<String, Location>,
-) -> Res<Winch> {
+fn winch(ctx: &Ctx<'_>, raw: &S<RawWinch>, cables: &[Cable], seen: &mut HashMap<String, Location>) -> Res<Winch> {
     let r = raw.get_ref();
     let name = ctx.name(&r.name, "winch", seen)?;
     let o = format!("winch `{name}`");
     let o = o.as_str();
     let Some(cable) = cables.iter().find(|c| &c.name == r.cable.get_ref()) else {
         let known: Vec<&str> = cables.iter().map(|c| c.name.as_str()).collect();
-        let known = if known.is_empty() {
-            "no cables are defined".into()
-        } else {
-            format!("known cables: {}", list(&known))
-        };
-        return Err(ctx.err(
-            r.cable.span(),
-            format!("{o}: unknown cable `{}` ({known})", r.cable.get_ref()),
-        ));
+        let known = if known.is_empty() { "no cables are defined".into() } else { format!("known cables: {}", list(&known)) };
+        return Err(ctx.err(r.cable.span(), format!("{o}: unknown cable `{}` ({known})", r.cable.get_ref())));
     };
     let at = match ctx.choice(&r.at, o, "cable end", &["start", "end"])? {
         "start" => CableSide::Start,
         _ => CableSide::End,
     };
-    let held = if at == CableSide::Start {
-        &cable.start
-    } else {
-        &cable.end
-    };
+    let held = if at == CableSide::Start { &cable.start } else { &cable.end };
     if *held == CableEnd::Free {
         return Err(ctx.err(
             r.at.span(),
             format!("{o}: the `{}` of cable `{}` is free; a winch needs an end attached to a body or the world", r.at.get_ref(), cable.name),
         ));
     }
-    let speed = ctx.table(&r.speed, o, "speed", "[[t, v], ...] (s, m/s)", |d| {
-        ctx.datum_num(d, o, "speed", "speed")
-    })?;
+    let speed = ctx.table(&r.speed, o, "speed", "[[t, v], ...] (s, m/s)", |d| ctx.datum_num(d, o, "speed", "speed"))?;
     let min_length = ctx.opt(&r.min_length, o, "min_length")?;
     let max_length = ctx.opt(&r.max_length, o, "max_length")?;
     if let (Some(v), Some(x)) = (&r.min_length, min_length) {
         ctx.check(v, o, "min_length", Rule::NonNegative, "m")?;
         if x > cable.length {
-            return Err(ctx.err(
-                v.span(),
-                format!(
-                    "{o}: `min_length` {} m is above the cable's initial length {} m",
-                    fmt_num(x),
-                    fmt_num(cable.length)
-                ),
-            ));
+            return Err(ctx.err(v.span(), format!("{o}: `min_length` {} m is above the cable's initial length {} m", fmt_num(x), fmt_num(cable.length))));
         }
     }
     if let (Some(v), Some(x)) = (&r.max_length, max_length) {
         ctx.check(v, o, "max_length", Rule::Positive, "m")?;
         if x < cable.length {
-            return Err(ctx.err(
-                v.span(),
-                format!(
-                    "{o}: `max_length` {} m is below the cable's initial length {} m",
-                    fmt_num(x),
-                    fmt_num(cable.length)
-                ),
-            ));
+            return Err(ctx.err(v.span(), format!("{o}: `max_length` {} m is below the cable's initial length {} m", fmt_num(x), fmt_num(cable.length))));
         }
     }
     if let (Some(lo), Some(hi), Some(v)) = (min_length, max_length, &r.max_length) {
         if lo >= hi {
-            return Err(ctx.err(
-                v.span(),
-                format!(
-                    "{o}: `min_length` must be less than `max_length`, found {} and {}",
-                    fmt_num(lo),
-                    fmt_num(hi)
-                ),
-            ));
+            return Err(ctx.err(v.span(), format!("{o}: `min_length` must be less than `max_length`, found {} and {}", fmt_num(lo), fmt_num(hi))));
         }
     }
     Ok(Winch {
@@ -402,13 +258,7 @@ fn winch(
         cable: cable.name.clone(),
         at,
         drum_radius: ctx.check(&r.drum_radius, o, "drum_radius", Rule::Positive, "m")?,
-        drum_inertia: ctx.check(
-            &r.drum_inertia,
-            o,
-            "drum_inertia",
-            Rule::NonNegative,
-            "kg·m²",
-        )?,
+        drum_inertia: ctx.check(&r.drum_inertia, o, "drum_inertia", Rule::NonNegative, "kg·m²")?,
         max_torque: ctx.check(&r.max_torque, o, "max_torque", Rule::Positive, "N·m")?,
         speed: TimeSeries { points: speed },
         brake: r.brake.as_ref().is_none_or(|b| *b.get_ref()),

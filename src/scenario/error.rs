@@ -40,12 +40,7 @@ pub struct ScenarioError {
 
 impl ScenarioError {
     /// An error at byte range `span` of `source` (the text of `file`).
-    pub fn new(
-        file: impl Into<PathBuf>,
-        source: &str,
-        span: Range<usize>,
-        message: impl Into<String>,
-    ) -> Self {
+    pub fn new(file: impl Into<PathBuf>, source: &str, span: Range<usize>, message: impl Into<String>) -> Self {
         let index = LineIndex::new(source);
         let loc = index.location(span.start);
         ScenarioError {
@@ -65,13 +60,8 @@ impl ScenarioError {
     /// column to the end of the line.
     pub fn at(file: impl Into<PathBuf>, location: Location, message: impl Into<String>) -> Self {
         let file = file.into();
-        let source_line = std::fs::read_to_string(&file)
-            .map(|s| line_of(&s, location.line).to_string())
-            .unwrap_or_default();
-        let rest = source_line
-            .chars()
-            .skip(location.col.saturating_sub(1))
-            .collect::<String>();
+        let source_line = std::fs::read_to_string(&file).map(|s| line_of(&s, location.line).to_string()).unwrap_or_default();
+        let rest = source_line.chars().skip(location.col.saturating_sub(1)).collect::<String>();
         ScenarioError {
             file,
             line: location.line,
@@ -98,10 +88,7 @@ impl ScenarioError {
 
     /// The position of the error.
     pub fn location(&self) -> Location {
-        Location {
-            line: self.line,
-            col: self.col,
-        }
+        Location { line: self.line, col: self.col }
     }
 
     /// The rustc-style rendering used by `Display`.
@@ -113,31 +100,13 @@ impl ScenarioError {
         }
         let num = self.line.to_string();
         let pad = " ".repeat(num.len());
-        let _ = write!(
-            out,
-            "\n{pad}--> {}:{}:{}\n{pad} |",
-            self.file.display(),
-            self.line,
-            self.col
-        );
+        let _ = write!(out, "\n{pad}--> {}:{}:{}\n{pad} |", self.file.display(), self.line, self.col);
         if !self.source_line.is_empty() || self.col <= 1 {
             let (shown, col) = window(&self.source_line, self.col);
             // Keep tabs so that the caret lines up under the source text.
-            let lead: String = shown
-                .chars()
-                .take(col.saturating_sub(1))
-                .map(|c| if c == '\t' { '\t' } else { ' ' })
-                .collect();
-            let room = shown
-                .chars()
-                .count()
-                .saturating_sub(col.saturating_sub(1))
-                .max(1);
-            let _ = write!(
-                out,
-                "\n{num} | {shown}\n{pad} | {lead}{}",
-                "^".repeat(self.len.clamp(1, room))
-            );
+            let lead: String = shown.chars().take(col.saturating_sub(1)).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
+            let room = shown.chars().count().saturating_sub(col.saturating_sub(1)).max(1);
+            let _ = write!(out, "\n{num} | {shown}\n{pad} | {lead}{}", "^".repeat(self.len.clamp(1, room)));
         }
         out
     }
@@ -154,10 +123,7 @@ fn window(line: &str, col: usize) -> (String, usize) {
         return (line.to_string(), col);
     }
     let half = MAX_LINE / 2;
-    let from = col
-        .saturating_sub(1)
-        .saturating_sub(half)
-        .min(n.saturating_sub(MAX_LINE));
+    let from = col.saturating_sub(1).saturating_sub(half).min(n.saturating_sub(MAX_LINE));
     let mut shown: String = line.chars().skip(from).take(MAX_LINE).collect();
     let mut col = col - from;
     if from > 0 {
@@ -180,10 +146,7 @@ mod tests {
         let at = src.find("0\n").unwrap_or(0);
         let e = ScenarioError::new("x.toml", src, at..at + 1, "bad");
         assert_eq!((e.line, e.col), (12, 12));
-        assert_eq!(
-            e.to_string(),
-            "error: bad\n  --> x.toml:12:12\n   |\n12 | segments = 0\n   |            ^"
-        );
+        assert_eq!(e.to_string(), "error: bad\n  --> x.toml:12:12\n   |\n12 | segments = 0\n   |            ^");
     }
 
     #[test]
@@ -194,9 +157,6 @@ mod tests {
         assert!(shown.starts_with('…') && shown.ends_with('…'));
         assert_eq!(window("short", 3), ("short".to_string(), 3));
         let (shown, col) = window(&line, 1000);
-        assert_eq!(
-            (shown.chars().nth(col - 1), shown.ends_with('…')),
-            (Some('b'), false)
-        );
+        assert_eq!((shown.chars().nth(col - 1), shown.ends_with('…')), (Some('b'), false));
     }
 }

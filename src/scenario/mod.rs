@@ -33,9 +33,8 @@ pub use self::error::ScenarioError;
 pub use self::probes::{Component, Probe, ProbeTarget, Quantity};
 pub use self::span::Location;
 pub use self::types::{
-    Body, BodyKind, Cable, CableEnd, CableSide, Drive, Environment, IntegratorChoice, Joint,
-    JointKind, Motion, PointLoad, Scenario, Shape, Simulation, TimeSeries, Winch,
-    INTEGRATOR_NAMES,
+    Body, BodyKind, Cable, CableEnd, CableSide, Drive, Environment, IntegratorChoice, Joint, JointKind, Motion, PointLoad, Scenario, Shape, Simulation,
+    TimeSeries, Winch, INTEGRATOR_NAMES,
 };
 
 /// Read and validate the scenario file at `path`.
@@ -64,9 +63,7 @@ fn parse_at(source: &str, file: &Path) -> Result<Scenario, ScenarioError> {
         ScenarioError::new(file, source, span, format!("{prefix}{msg}"))
     };
     // Syntax first, so that syntax errors say so.
-    source
-        .parse::<toml::Table>()
-        .map_err(|e| toml_err(e, "TOML syntax error: "))?;
+    source.parse::<toml::Table>().map_err(|e| toml_err(e, "TOML syntax error: "))?;
     let raw: raw::RawScenario = toml::from_str(source).map_err(|e| toml_err(e, ""))?;
     let ctx = validate::Ctx::new(file, source);
     validate::validate(&ctx, file, raw)
@@ -96,8 +93,6 @@ mod tests {
     fn scenario_load_reports_missing_file() {
         let err = super::load(std::path::Path::new("/nonexistent/x.toml")).unwrap_err();
         assert!(err.io.is_some() && err.line == 0);
-        assert!(err
-            .to_string()
-            .starts_with("error: cannot read /nonexistent/x.toml"));
+        assert!(err.to_string().starts_with("error: cannot read /nonexistent/x.toml"));
     }
 }

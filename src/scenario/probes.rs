@@ -115,10 +115,7 @@ impl Probe {
     /// component, `NAME.x`, `NAME.y`, `NAME.z` for a whole vector.
     pub fn columns(&self) -> Vec<String> {
         if self.is_vector() && self.component.is_none() {
-            ["x", "y", "z"]
-                .iter()
-                .map(|c| format!("{}.{c}", self.name))
-                .collect()
+            ["x", "y", "z"].iter().map(|c| format!("{}.{c}", self.name)).collect()
         } else {
             vec![self.name.clone()]
         }
@@ -130,20 +127,8 @@ use Quantity as Q;
 /// The quantities valid for each target kind, in the order of the docs.
 fn valid(target: &ProbeTarget) -> &'static [Quantity] {
     match target {
-        ProbeTarget::Body(_) => &[
-            Q::Position,
-            Q::Velocity,
-            Q::Rotation,
-            Q::AngularVelocity,
-            Q::ContactForce,
-        ],
-        ProbeTarget::Cable(_) => &[
-            Q::Position,
-            Q::Velocity,
-            Q::Tension,
-            Q::Length,
-            Q::ContactForce,
-        ],
+        ProbeTarget::Body(_) => &[Q::Position, Q::Velocity, Q::Rotation, Q::AngularVelocity, Q::ContactForce],
+        ProbeTarget::Cable(_) => &[Q::Position, Q::Velocity, Q::Tension, Q::Length, Q::ContactForce],
         ProbeTarget::Joint(_) => &[Q::Position, Q::Velocity, Q::Force],
         ProbeTarget::Winch(_) => &[Q::Length, Q::Speed, Q::Torque],
         ProbeTarget::System => &[Q::Energy, Q::KineticEnergy],
@@ -161,14 +146,7 @@ pub(crate) fn is_vector(target: &ProbeTarget, q: Quantity) -> bool {
 }
 
 /// All `[[probe]]` tables.
-pub(crate) fn probes(
-    ctx: &Ctx<'_>,
-    raw: &[S<RawProbe>],
-    bodies: &[Body],
-    joints: &[Joint],
-    cables: &[Cable],
-    winches: &[Winch],
-) -> Res<Vec<Probe>> {
+pub(crate) fn probes(ctx: &Ctx<'_>, raw: &[S<RawProbe>], bodies: &[Body], joints: &[Joint], cables: &[Cable], winches: &[Winch]) -> Res<Vec<Probe>> {
     let mut seen = HashMap::new();
     let mut columns = HashSet::new();
     let mut out = Vec::with_capacity(raw.len());
@@ -176,13 +154,7 @@ pub(crate) fn probes(
         let probe = probe(ctx, p, bodies, joints, cables, winches, &mut seen)?;
         for c in probe.columns() {
             if c == "time" || !columns.insert(c.clone()) {
-                return Err(ctx.err(
-                    p.get_ref().name.span(),
-                    format!(
-                        "probe `{}`: column `{c}` is already used (by `time` or another probe)",
-                        probe.name
-                    ),
-                ));
+                return Err(ctx.err(p.get_ref().name.span(), format!("probe `{}`: column `{c}` is already used (by `time` or another probe)", probe.name)));
             }
         }
         out.push(probe);
@@ -191,22 +163,9 @@ pub(crate) fn probes(
 }
 
 /// Error "unknown KIND `name` (known KINDs: ...)".
-fn unknown(
-    ctx: &Ctx<'_>,
-    v: &S<String>,
-    o: &str,
-    kind: &str,
-    known: Vec<&str>,
-) -> super::ScenarioError {
-    let known = if known.is_empty() {
-        format!("no {kind}s are defined")
-    } else {
-        format!("known {kind}s: {}", list(&known))
-    };
-    ctx.err(
-        v.span(),
-        format!("{o}: unknown {kind} `{}` ({known})", v.get_ref()),
-    )
+fn unknown(ctx: &Ctx<'_>, v: &S<String>, o: &str, kind: &str, known: Vec<&str>) -> super::ScenarioError {
+    let known = if known.is_empty() { format!("no {kind}s are defined") } else { format!("known {kind}s: {}", list(&known)) };
+    ctx.err(v.span(), format!("{o}: unknown {kind} `{}` ({known})", v.get_ref()))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -226,12 +185,7 @@ fn probe(
 
     // Exactly one target.
     let mut targets = Vec::new();
-    for (field, v) in [
-        ("body", &r.body),
-        ("cable", &r.cable),
-        ("joint", &r.joint),
-        ("winch", &r.winch),
-    ] {
+    for (field, v) in [("body", &r.body), ("cable", &r.cable), ("joint", &r.joint), ("winch", &r.winch)] {
         if let Some(v) = v {
             targets.push((field, v.span()));
         }
@@ -240,69 +194,32 @@ fn probe(
         targets.push(("system", s.span()));
     }
     match targets.as_slice() {
-        [] => {
-            return Err(ctx.err(
-                raw.span(),
-                format!("{o}: needs exactly one target: `body`, `cable`, `joint`, `winch` or `system = true`"),
-            ))
-        }
+        [] => return Err(ctx.err(raw.span(), format!("{o}: needs exactly one target: `body`, `cable`, `joint`, `winch` or `system = true`"))),
         [_] => {}
-        [first, second, ..] => {
-            return Err(ctx.err(
-                second.1.clone(),
-                format!("{o}: has several targets (`{}` and `{}`); give exactly one", first.0, second.0),
-            ))
-        }
+        [first, second, ..] => return Err(ctx.err(second.1.clone(), format!("{o}: has several targets (`{}` and `{}`); give exactly one", first.0, second.0))),
     }
     let mut cable = None;
     let mut joint_kind = None;
     let target = if let Some(b) = &r.body {
         if !bodies.iter().any(|x| &x.name == b.get_ref()) {
-            return Err(unknown(
-                ctx,
-                b,
-                o,
-                "body",
-                bodies.iter().map(|x| x.name.as_str()).collect(),
-            ));
+            return Err(unknown(ctx, b, o, "body", bodies.iter().map(|x| x.name.as_str()).collect()));
         }
         ProbeTarget::Body(b.get_ref().clone())
     } else if let Some(c) = &r.cable {
         cable = cables.iter().find(|x| &x.name == c.get_ref());
         if cable.is_none() {
-            return Err(unknown(
-                ctx,
-                c,
-                o,
-                "cable",
-                cables.iter().map(|x| x.name.as_str()).collect(),
-            ));
+            return Err(unknown(ctx, c, o, "cable", cables.iter().map(|x| x.name.as_str()).collect()));
         }
         ProbeTarget::Cable(c.get_ref().clone())
     } else if let Some(j) = &r.joint {
-        joint_kind = joints
-            .iter()
-            .find(|x| &x.name == j.get_ref())
-            .map(|x| x.kind);
+        joint_kind = joints.iter().find(|x| &x.name == j.get_ref()).map(|x| x.kind);
         if joint_kind.is_none() {
-            return Err(unknown(
-                ctx,
-                j,
-                o,
-                "joint",
-                joints.iter().map(|x| x.name.as_str()).collect(),
-            ));
+            return Err(unknown(ctx, j, o, "joint", joints.iter().map(|x| x.name.as_str()).collect()));
         }
         ProbeTarget::Joint(j.get_ref().clone())
     } else if let Some(w) = &r.winch {
         if !winches.iter().any(|x| &x.name == w.get_ref()) {
-            return Err(unknown(
-                ctx,
-                w,
-                o,
-                "winch",
-                winches.iter().map(|x| x.name.as_str()).collect(),
-            ));
+            return Err(unknown(ctx, w, o, "winch", winches.iter().map(|x| x.name.as_str()).collect()));
         }
         ProbeTarget::Winch(w.get_ref().clone())
     } else {
@@ -311,30 +228,15 @@ fn probe(
 
     let kind = targets.first().map_or("system", |t| t.0);
     let valid = valid(&target);
-    let quantity = valid
-        .iter()
-        .copied()
-        .find(|q| q.name() == r.quantity.get_ref())
-        .ok_or_else(|| {
-            let names: Vec<&str> = valid.iter().map(|q| q.name()).collect();
-            ctx.err(
-                r.quantity.span(),
-                format!(
-                    "{o}: quantity `{}` is not available for a {kind} probe; valid quantities: {}",
-                    r.quantity.get_ref(),
-                    list(&names)
-                ),
-            )
-        })?;
+    let quantity = valid.iter().copied().find(|q| q.name() == r.quantity.get_ref()).ok_or_else(|| {
+        let names: Vec<&str> = valid.iter().map(|q| q.name()).collect();
+        ctx.err(r.quantity.span(), format!("{o}: quantity `{}` is not available for a {kind} probe; valid quantities: {}", r.quantity.get_ref(), list(&names)))
+    })?;
     if matches!(quantity, Q::Position | Q::Velocity) {
         if let Some(k @ (JointKind::Fixed | JointKind::Spherical)) = joint_kind {
             return Err(ctx.err(
                 r.quantity.span(),
-                format!(
-                    "{o}: `{}` needs a revolute or prismatic joint, but the joint is {}",
-                    quantity.name(),
-                    format!("{k:?}").to_lowercase()
-                ),
+                format!("{o}: `{}` needs a revolute or prismatic joint, but the joint is {}", quantity.name(), format!("{k:?}").to_lowercase()),
             ));
         }
     }
@@ -345,33 +247,13 @@ fn probe(
         (Some(v), Some(c)) if at_point => {
             let s = ctx.num(v, o, "s")?;
             if !(0.0..=c.length).contains(&s) {
-                return Err(ctx.err(
-                    v.span(),
-                    format!(
-                        "{o}: `s` must be between 0 and the cable length {} m, found {}",
-                        fmt_num(c.length),
-                        fmt_num(s)
-                    ),
-                ));
+                return Err(ctx.err(v.span(), format!("{o}: `s` must be between 0 and the cable length {} m, found {}", fmt_num(c.length), fmt_num(s))));
             }
             Some(s)
         }
-        (Some(v), _) => {
-            return Err(ctx.err(
-                v.span(),
-                format!(
-                    "{o}: `s` only applies to cable `position`, `velocity` and `tension` probes"
-                ),
-            ))
-        }
+        (Some(v), _) => return Err(ctx.err(v.span(), format!("{o}: `s` only applies to cable `position`, `velocity` and `tension` probes"))),
         (None, _) if at_point => {
-            return Err(ctx.err(
-                r.quantity.span(),
-                format!(
-                    "{o}: cable `{}` needs `s`, the arc length from the cable start (m)",
-                    quantity.name()
-                ),
-            ))
+            return Err(ctx.err(r.quantity.span(), format!("{o}: cable `{}` needs `s`, the arc length from the cable start (m)", quantity.name())))
         }
         (None, _) => None,
     };
@@ -379,19 +261,9 @@ fn probe(
     let component = match &r.component {
         Some(c) => {
             if !is_vector(&target, quantity) {
-                return Err(ctx.err(
-                    c.span(),
-                    format!(
-                        "{o}: `component` only applies to vector quantities; `{}` is a scalar",
-                        quantity.name()
-                    ),
-                ));
+                return Err(ctx.err(c.span(), format!("{o}: `component` only applies to vector quantities; `{}` is a scalar", quantity.name())));
             }
-            let names: &[&str] = if quantity == Q::Rotation {
-                &["x", "y", "z"]
-            } else {
-                &["x", "y", "z", "norm"]
-            };
+            let names: &[&str] = if quantity == Q::Rotation { &["x", "y", "z"] } else { &["x", "y", "z", "norm"] };
             Some(match ctx.choice(c, o, "component", names)? {
                 "x" => Component::X,
                 "y" => Component::Y,
@@ -401,12 +273,5 @@ fn probe(
         }
         None => None,
     };
-    Ok(Probe {
-        name,
-        target,
-        quantity,
-        s,
-        component,
-        location: ctx.loc(raw.span()),
-    })
+    Ok(Probe { name, target, quantity, s, component, location: ctx.loc(raw.span()) })
 }

@@ -51,10 +51,7 @@ impl<'a> LineIndex<'a> {
         let line0 = self.starts.partition_point(|&s| s <= b).saturating_sub(1);
         let start = self.starts.get(line0).copied().unwrap_or(0);
         let col = self.src.get(start..b).map_or(0, |s| s.chars().count()) + 1;
-        Location {
-            line: line0 + 1,
-            col,
-        }
+        Location { line: line0 + 1, col }
     }
 
     /// Text of 1-based line `line` without its line terminator.
@@ -78,10 +75,7 @@ pub(crate) fn line_of(src: &str, line: usize) -> &str {
     if line == 0 {
         return "";
     }
-    src.split('\n')
-        .nth(line - 1)
-        .map(|l| l.trim_end_matches('\r'))
-        .unwrap_or("")
+    src.split('\n').nth(line - 1).map(|l| l.trim_end_matches('\r')).unwrap_or("")
 }
 
 #[cfg(test)]

@@ -11,18 +11,8 @@ use super::probes::Probe;
 use super::span::Location;
 
 /// Names accepted by `[simulation] integrator`.
-pub const INTEGRATOR_NAMES: &[&str] = &[
-    "euler",
-    "improved_euler",
-    "rk4",
-    "linear_acceleration",
-    "newmark",
-    "wilson_theta",
-    "hht",
-    "generalized_alpha",
-    "symplectic_euler",
-    "linearly_implicit",
-];
+pub const INTEGRATOR_NAMES: &[&str] =
+    &["euler", "improved_euler", "rk4", "linear_acceleration", "newmark", "wilson_theta", "hht", "generalized_alpha", "symplectic_euler", "linearly_implicit"];
 
 /// A parsed and validated scenario file.
 #[derive(Debug, Clone, PartialEq)]
@@ -110,15 +100,7 @@ pub struct IntegratorChoice {
 impl Default for IntegratorChoice {
     /// `generalized_alpha` with ρ∞ = 0.
     fn default() -> Self {
-        IntegratorChoice {
-            name: "generalized_alpha".to_string(),
-            beta: None,
-            gamma: None,
-            theta: None,
-            alpha: None,
-            rho_inf: Some(0.0),
-            w: None,
-        }
+        IntegratorChoice { name: "generalized_alpha".to_string(), beta: None, gamma: None, theta: None, alpha: None, rho_inf: Some(0.0), w: None }
     }
 }
 
@@ -257,11 +239,7 @@ impl Motion {
     /// (`base` is the sine's centre; a table gives absolute positions.)
     pub fn position_at(&self, t: f64, base: DVec3) -> DVec3 {
         match self {
-            Motion::Sine {
-                amplitude,
-                period,
-                phase,
-            } => base + *amplitude * (std::f64::consts::TAU * t / period + phase).sin(),
+            Motion::Sine { amplitude, period, phase } => base + *amplitude * (std::f64::consts::TAU * t / period + phase).sin(),
             Motion::Table { points } => interpolate(points, t).unwrap_or(base),
             Motion::Spin { .. } => base,
         }
@@ -304,11 +282,7 @@ impl Motion {
     /// table; at a breakpoint the slope of the segment that starts there).
     pub fn velocity_at(&self, t: f64) -> DVec3 {
         match self {
-            Motion::Sine {
-                amplitude,
-                period,
-                phase,
-            } => {
+            Motion::Sine { amplitude, period, phase } => {
                 let w = std::f64::consts::TAU / period;
                 *amplitude * w * (w * t + phase).cos()
             }
@@ -340,10 +314,7 @@ impl TimeSeries {
     pub fn slope_at(&self, t: f64) -> f64 {
         let eps = 1e-9 * t.abs().max(1.0);
         let i = self.points.partition_point(|p| p.0 <= t + eps);
-        let at_breakpoint = i
-            .checked_sub(1)
-            .and_then(|k| self.points.get(k))
-            .is_some_and(|p| p.0 >= t - eps);
+        let at_breakpoint = i.checked_sub(1).and_then(|k| self.points.get(k)).is_some_and(|p| p.0 >= t - eps);
         let one = |t: f64| slope(&self.points, t).unwrap_or(0.0);
         if at_breakpoint {
             0.5 * (one(t - 2.0 * eps) + one(t + 2.0 * eps))
@@ -369,9 +340,7 @@ impl TimeSeries {
         let mut xs = vec![a];
         xs.extend(self.points.iter().map(|p| p.0).filter(|&x| x > a && x < b));
         xs.push(b);
-        xs.windows(2)
-            .map(|w| 0.5 * (w[1] - w[0]) * (self.value_at(w[0]) + self.value_at(w[1])))
-            .sum()
+        xs.windows(2).map(|w| 0.5 * (w[1] - w[0]) * (self.value_at(w[0]) + self.value_at(w[1]))).sum()
     }
 }
 
@@ -573,13 +542,7 @@ pub struct Environment {
 
 impl Default for Environment {
     fn default() -> Self {
-        Environment {
-            air_density: 1.225,
-            wind: DVec3::ZERO,
-            water_surface: None,
-            water_density: 1025.0,
-            current: DVec3::ZERO,
-        }
+        Environment { air_density: 1.225, wind: DVec3::ZERO, water_surface: None, water_density: 1025.0, current: DVec3::ZERO }
     }
 }
 

@@ -24,11 +24,7 @@ pub(crate) struct Ctx<'a> {
 
 impl<'a> Ctx<'a> {
     pub(crate) fn new(file: &'a Path, src: &'a str) -> Self {
-        Ctx {
-            file,
-            src,
-            index: LineIndex::new(src),
-        }
+        Ctx { file, src, index: LineIndex::new(src) }
     }
 
     /// An error at `span`.
@@ -47,10 +43,7 @@ impl<'a> Ctx<'a> {
         if x.is_finite() {
             Ok(x)
         } else {
-            Err(self.err(
-                v.span(),
-                format!("{owner}: `{field}` must be a finite number, found {x}"),
-            ))
+            Err(self.err(v.span(), format!("{owner}: `{field}` must be a finite number, found {x}")))
         }
     }
 
@@ -60,44 +53,18 @@ impl<'a> Ctx<'a> {
     }
 
     /// A finite number with `ok(x)`; otherwise "`field` must be `rule` `unit`".
-    pub(crate) fn check(
-        &self,
-        v: &S<f64>,
-        owner: &str,
-        field: &str,
-        rule: Rule,
-        unit: &str,
-    ) -> Res<f64> {
+    pub(crate) fn check(&self, v: &S<f64>, owner: &str, field: &str, rule: Rule, unit: &str) -> Res<f64> {
         let x = self.num(v, owner, field)?;
         if rule.ok(x) {
             Ok(x)
         } else {
-            let unit = if unit.is_empty() {
-                String::new()
-            } else {
-                format!(" {unit}")
-            };
-            Err(self.err(
-                v.span(),
-                format!(
-                    "{owner}: `{field}` must be {}{unit}, found {}",
-                    rule.text(),
-                    fmt_num(x)
-                ),
-            ))
+            let unit = if unit.is_empty() { String::new() } else { format!(" {unit}") };
+            Err(self.err(v.span(), format!("{owner}: `{field}` must be {}{unit}, found {}", rule.text(), fmt_num(x))))
         }
     }
 
     /// An optional checked number with a default.
-    pub(crate) fn check_or(
-        &self,
-        v: &Option<S<f64>>,
-        owner: &str,
-        field: &str,
-        rule: Rule,
-        unit: &str,
-        default: f64,
-    ) -> Res<f64> {
+    pub(crate) fn check_or(&self, v: &Option<S<f64>>, owner: &str, field: &str, rule: Rule, unit: &str, default: f64) -> Res<f64> {
         match v {
             Some(v) => self.check(v, owner, field, rule, unit),
             None => Ok(default),
@@ -108,13 +75,7 @@ impl<'a> Ctx<'a> {
     pub(crate) fn vec3(&self, v: &Vector, owner: &str, field: &str, unit: &str) -> Res<DVec3> {
         let items = v.get_ref();
         if items.len() != 3 {
-            return Err(self.err(
-                v.span(),
-                format!(
-                    "{owner}: `{field}` must have 3 components [x, y, z] ({unit}), found {}",
-                    items.len()
-                ),
-            ));
+            return Err(self.err(v.span(), format!("{owner}: `{field}` must have 3 components [x, y, z] ({unit}), found {}", items.len())));
         }
         let mut out = [0.0; 3];
         for (o, item) in out.iter_mut().zip(items) {
@@ -124,46 +85,18 @@ impl<'a> Ctx<'a> {
     }
 
     /// An optional 3-vector with a default.
-    pub(crate) fn vec3_or(
-        &self,
-        v: &Option<Vector>,
-        owner: &str,
-        field: &str,
-        unit: &str,
-        default: DVec3,
-    ) -> Res<DVec3> {
-        v.as_ref()
-            .map_or(Ok(default), |v| self.vec3(v, owner, field, unit))
+    pub(crate) fn vec3_or(&self, v: &Option<Vector>, owner: &str, field: &str, unit: &str, default: DVec3) -> Res<DVec3> {
+        v.as_ref().map_or(Ok(default), |v| self.vec3(v, owner, field, unit))
     }
 
     /// One of `valid`; otherwise an error listing them.
-    pub(crate) fn choice<'v>(
-        &self,
-        v: &S<String>,
-        owner: &str,
-        field: &str,
-        valid: &[&'v str],
-    ) -> Res<&'v str> {
+    pub(crate) fn choice<'v>(&self, v: &S<String>, owner: &str, field: &str, valid: &[&'v str]) -> Res<&'v str> {
         let s = v.get_ref().as_str();
-        valid.iter().find(|x| **x == s).copied().ok_or_else(|| {
-            self.err(
-                v.span(),
-                format!(
-                    "{owner}: unknown {field} `{s}`; expected one of {}",
-                    list(valid)
-                ),
-            )
-        })
+        valid.iter().find(|x| **x == s).copied().ok_or_else(|| self.err(v.span(), format!("{owner}: unknown {field} `{s}`; expected one of {}", list(valid))))
     }
 
     /// Error if an optional field that does not apply is present.
-    pub(crate) fn forbid<T>(
-        &self,
-        v: &Option<S<T>>,
-        owner: &str,
-        field: &str,
-        why: &str,
-    ) -> Res<()> {
+    pub(crate) fn forbid<T>(&self, v: &Option<S<T>>, owner: &str, field: &str, why: &str) -> Res<()> {
         match v {
             Some(v) => Err(self.err(v.span(), format!("{owner}: `{field}` {why}"))),
             None => Ok(()),
@@ -171,38 +104,19 @@ impl<'a> Ctx<'a> {
     }
 
     /// A required optional field.
-    pub(crate) fn need<'v, T>(
-        &self,
-        v: &'v Option<S<T>>,
-        at: Range<usize>,
-        owner: &str,
-        field: &str,
-        why: &str,
-    ) -> Res<&'v S<T>> {
-        v.as_ref()
-            .ok_or_else(|| self.err(at, format!("{owner}: missing field `{field}`{why}")))
+    pub(crate) fn need<'v, T>(&self, v: &'v Option<S<T>>, at: Range<usize>, owner: &str, field: &str, why: &str) -> Res<&'v S<T>> {
+        v.as_ref().ok_or_else(|| self.err(at, format!("{owner}: missing field `{field}`{why}")))
     }
 
     /// A non-empty name, unique in `seen` (which records it).
-    pub(crate) fn name(
-        &self,
-        v: &S<String>,
-        kind: &str,
-        seen: &mut HashMap<String, Location>,
-    ) -> Res<String> {
+    pub(crate) fn name(&self, v: &S<String>, kind: &str, seen: &mut HashMap<String, Location>) -> Res<String> {
         let name = v.get_ref().clone();
         if name.trim().is_empty() {
             return Err(self.err(v.span(), format!("{kind} name must not be empty")));
         }
         let here = self.loc(v.span());
         if let Some(first) = seen.get(&name) {
-            return Err(self.err(
-                v.span(),
-                format!(
-                    "duplicate {kind} name `{name}` (first defined at line {})",
-                    first.line
-                ),
-            ));
+            return Err(self.err(v.span(), format!("duplicate {kind} name `{name}` (first defined at line {})", first.line)));
         }
         seen.insert(name.clone(), here);
         Ok(name)
@@ -210,20 +124,8 @@ impl<'a> Ctx<'a> {
 
     /// A piecewise-linear table `[[t, v], ...]` of finite numbers with
     /// strictly increasing times. Each value is passed through `value`.
-    pub(crate) fn table<T>(
-        &self,
-        v: &S<Datum>,
-        owner: &str,
-        field: &str,
-        shape: &str,
-        mut value: impl FnMut(&S<Datum>) -> Res<T>,
-    ) -> Res<Vec<(f64, T)>> {
-        let bad = |span: Range<usize>, what: String| {
-            self.err(
-                span,
-                format!("{owner}: `{field}` must be a list of points {shape}; {what}"),
-            )
-        };
+    pub(crate) fn table<T>(&self, v: &S<Datum>, owner: &str, field: &str, shape: &str, mut value: impl FnMut(&S<Datum>) -> Res<T>) -> Res<Vec<(f64, T)>> {
+        let bad = |span: Range<usize>, what: String| self.err(span, format!("{owner}: `{field}` must be a list of points {shape}; {what}"));
         let Datum::List(points) = v.get_ref() else {
             return Err(bad(v.span(), format!("found {}", v.get_ref().kind())));
         };
@@ -235,12 +137,7 @@ impl<'a> Ctx<'a> {
             let n = i + 1;
             let pair = match p.get_ref() {
                 Datum::List(pair) if pair.len() == 2 => pair,
-                Datum::List(pair) => {
-                    return Err(bad(
-                        p.span(),
-                        format!("point {n} has {} elements", pair.len()),
-                    ))
-                }
+                Datum::List(pair) => return Err(bad(p.span(), format!("point {n} has {} elements", pair.len()))),
                 other => return Err(bad(p.span(), format!("point {n} is {}", other.kind()))),
             };
             let t = self.datum_num(&pair[0], owner, field, "time")?;
@@ -248,11 +145,7 @@ impl<'a> Ctx<'a> {
                 if t <= prev.0 {
                     return Err(self.err(
                         pair[0].span(),
-                        format!(
-                            "{owner}: times in `{field}` must be strictly increasing; point {n} has t = {} after t = {}",
-                            fmt_num(t),
-                            fmt_num(prev.0)
-                        ),
+                        format!("{owner}: times in `{field}` must be strictly increasing; point {n} has t = {} after t = {}", fmt_num(t), fmt_num(prev.0)),
                     ));
                 }
             }
@@ -265,17 +158,8 @@ impl<'a> Ctx<'a> {
     pub(crate) fn datum_num(&self, d: &S<Datum>, owner: &str, field: &str, what: &str) -> Res<f64> {
         match d.get_ref() {
             Datum::Num(x) if x.is_finite() => Ok(*x),
-            Datum::Num(x) => Err(self.err(
-                d.span(),
-                format!("{owner}: `{field}`: the {what} must be a finite number, found {x}"),
-            )),
-            other => Err(self.err(
-                d.span(),
-                format!(
-                    "{owner}: `{field}`: the {what} must be a number, found {}",
-                    other.kind()
-                ),
-            )),
+            Datum::Num(x) => Err(self.err(d.span(), format!("{owner}: `{field}`: the {what} must be a finite number, found {x}"))),
+            other => Err(self.err(d.span(), format!("{owner}: `{field}`: the {what} must be a number, found {}", other.kind()))),
         }
     }
 
@@ -284,23 +168,9 @@ impl<'a> Ctx<'a> {
         let items = match d.get_ref() {
             Datum::List(items) if items.len() == 3 => items,
             Datum::List(items) => {
-                return Err(self.err(
-                    d.span(),
-                    format!(
-                    "{owner}: `{field}`: a position must have 3 components [x, y, z] (m), found {}",
-                    items.len()
-                ),
-                ))
+                return Err(self.err(d.span(), format!("{owner}: `{field}`: a position must have 3 components [x, y, z] (m), found {}", items.len())))
             }
-            other => {
-                return Err(self.err(
-                    d.span(),
-                    format!(
-                        "{owner}: `{field}`: expected a position [x, y, z] (m), found {}",
-                        other.kind()
-                    ),
-                ))
-            }
+            other => return Err(self.err(d.span(), format!("{owner}: `{field}`: expected a position [x, y, z] (m), found {}", other.kind()))),
         };
         let mut out = [0.0; 3];
         for (o, item) in out.iter_mut().zip(items) {
@@ -368,11 +238,7 @@ pub(crate) fn fmt_vec(v: DVec3) -> String {
 
 /// "`a`, `b`, `c`".
 pub(crate) fn list<S: AsRef<str>>(names: &[S]) -> String {
-    names
-        .iter()
-        .map(|n| format!("`{}`", n.as_ref()))
-        .collect::<Vec<_>>()
-        .join(", ")
+    names.iter().map(|n| format!("`{}`", n.as_ref())).collect::<Vec<_>>().join(", ")
 }
 
 /// Validate the whole file.
@@ -387,16 +253,7 @@ pub(crate) fn validate(ctx: &Ctx<'_>, file: &Path, raw: RawScenario) -> Res<Scen
     let cables = super::cables::cables(ctx, &raw.cable, &bodies)?;
     let winches = super::cables::winches(ctx, &raw.winch, &cables)?;
     let probes = super::probes::probes(ctx, &raw.probe, &bodies, &joints, &cables, &winches)?;
-    Ok(Scenario {
-        file: file.to_path_buf(),
-        simulation,
-        bodies,
-        joints,
-        cables,
-        environment,
-        winches,
-        probes,
-    })
+    Ok(Scenario { file: file.to_path_buf(), simulation, bodies, joints, cables, environment, winches, probes })
 }
 
 /// `[simulation]`.
@@ -406,19 +263,13 @@ fn simulation(ctx: &Ctx<'_>, raw: &S<RawSimulation>) -> Res<Simulation> {
     let duration = ctx.check(&r.duration, o, "duration", Rule::Positive, "s")?;
     let dt = ctx.check(&r.dt, o, "dt", Rule::Positive, "s")?;
     if dt > 1.0 {
-        return Err(ctx.err(
-            r.dt.span(),
-            format!("{o}: `dt` must be at most 1 s, found {}", fmt_num(dt)),
-        ));
+        return Err(ctx.err(r.dt.span(), format!("{o}: `dt` must be at most 1 s, found {}", fmt_num(dt))));
     }
     let substeps = match &r.substeps {
         Some(v) => {
             let n = *v.get_ref();
             if !(1..=i64::from(u32::MAX)).contains(&n) {
-                return Err(ctx.err(
-                    v.span(),
-                    format!("{o}: `substeps` must be at least 1, found {n}"),
-                ));
+                return Err(ctx.err(v.span(), format!("{o}: `substeps` must be at least 1, found {n}")));
             }
             u32::try_from(n).ok()
         }
@@ -428,14 +279,7 @@ fn simulation(ctx: &Ctx<'_>, raw: &S<RawSimulation>) -> Res<Simulation> {
         Some(v) => {
             let x = ctx.check(v, o, "output_interval", Rule::Positive, "s")?;
             if x < dt {
-                return Err(ctx.err(
-                    v.span(),
-                    format!(
-                        "{o}: `output_interval` must be at least `dt` = {} s, found {}",
-                        fmt_num(dt),
-                        fmt_num(x)
-                    ),
-                ));
+                return Err(ctx.err(v.span(), format!("{o}: `output_interval` must be at least `dt` = {} s, found {}", fmt_num(dt), fmt_num(x))));
             }
             x
         }
@@ -443,23 +287,13 @@ fn simulation(ctx: &Ctx<'_>, raw: &S<RawSimulation>) -> Res<Simulation> {
     };
     let statics = r.statics.as_ref().is_some_and(|v| *v.get_ref());
     let static_load_steps = match &r.static_load_steps {
-        Some(v) if !statics => {
-            return Err(ctx.err(
-                v.span(),
-                format!("{o}: `static_load_steps` only applies with `statics = true`"),
-            ))
-        }
+        Some(v) if !statics => return Err(ctx.err(v.span(), format!("{o}: `static_load_steps` only applies with `statics = true`"))),
         Some(v) => {
             let n = *v.get_ref();
             u32::try_from(n)
                 .ok()
                 .filter(|n| (1..=10_000).contains(n))
-                .ok_or_else(|| {
-                    ctx.err(
-                        v.span(),
-                        format!("{o}: `static_load_steps` must be between 1 and 10000, found {n}"),
-                    )
-                })?
+                .ok_or_else(|| ctx.err(v.span(), format!("{o}: `static_load_steps` must be between 1 and 10000, found {n}")))?
         }
         None => 10,
     };
@@ -468,13 +302,7 @@ fn simulation(ctx: &Ctx<'_>, raw: &S<RawSimulation>) -> Res<Simulation> {
         dt,
         substeps,
         integrator: integrator(ctx, r)?,
-        gravity: ctx.vec3_or(
-            &r.gravity,
-            o,
-            "gravity",
-            "m/s²",
-            DVec3::new(0.0, -9.81, 0.0),
-        )?,
+        gravity: ctx.vec3_or(&r.gravity, o, "gravity", "m/s²", DVec3::new(0.0, -9.81, 0.0))?,
         output_interval,
         statics,
         static_load_steps,
@@ -494,22 +322,14 @@ fn integrator(ctx: &Ctx<'_>, r: &RawSimulation) -> Res<IntegratorChoice> {
         ("gamma", &r.gamma, "newmark", Rule::AtLeast(0.5)),
         ("theta", &r.theta, "wilson_theta", Rule::AtLeast(1.0)),
         ("alpha", &r.alpha, "hht", Rule::Between(-1.0 / 3.0, 0.0)),
-        (
-            "rho_inf",
-            &r.rho_inf,
-            "generalized_alpha",
-            Rule::Between(0.0, 1.0),
-        ),
+        ("rho_inf", &r.rho_inf, "generalized_alpha", Rule::Between(0.0, 1.0)),
         ("w", &r.w, "linearly_implicit", Rule::Between(0.5, 1.0)),
     ];
     let mut values = [None; 6];
     for (slot, (field, value, scheme, rule)) in values.iter_mut().zip(params) {
         if let Some(v) = value {
             if scheme != name {
-                return Err(ctx.err(
-                    v.span(),
-                    format!("{o}: `{field}` is a parameter of the `{scheme}` integrator, but the integrator is `{name}`"),
-                ));
+                return Err(ctx.err(v.span(), format!("{o}: `{field}` is a parameter of the `{scheme}` integrator, but the integrator is `{name}`")));
             }
             *slot = Some(ctx.check(v, o, field, rule, "")?);
         }
@@ -518,15 +338,7 @@ fn integrator(ctx: &Ctx<'_>, r: &RawSimulation) -> Res<IntegratorChoice> {
     if r.integrator.is_none() && rho_inf.is_none() {
         rho_inf = Some(0.0);
     }
-    Ok(IntegratorChoice {
-        name: name.to_string(),
-        beta,
-        gamma,
-        theta,
-        alpha,
-        rho_inf,
-        w,
-    })
+    Ok(IntegratorChoice { name: name.to_string(), beta, gamma, theta, alpha, rho_inf, w })
 }
 
 /// `[environment]`.
@@ -539,24 +351,10 @@ fn environment(ctx: &Ctx<'_>, r: &RawEnvironment) -> Res<Environment> {
         ctx.forbid(&r.current, o, "current", why)?;
     }
     Ok(Environment {
-        air_density: ctx.check_or(
-            &r.air_density,
-            o,
-            "air_density",
-            Rule::NonNegative,
-            "kg/m³",
-            d.air_density,
-        )?,
+        air_density: ctx.check_or(&r.air_density, o, "air_density", Rule::NonNegative, "kg/m³", d.air_density)?,
         wind: ctx.vec3_or(&r.wind, o, "wind", "m/s", d.wind)?,
         water_surface,
-        water_density: ctx.check_or(
-            &r.water_density,
-            o,
-            "water_density",
-            Rule::Positive,
-            "kg/m³",
-            d.water_density,
-        )?,
+        water_density: ctx.check_or(&r.water_density, o, "water_density", Rule::Positive, "kg/m³", d.water_density)?,
         current: ctx.vec3_or(&r.current, o, "current", "m/s", d.current)?,
     })
 }

@@ -226,9 +226,7 @@ pub const STATIC_MAX_ITERATIONS: usize = 500;
 pub fn shape_inertia(shape: &Shape, mass: f64) -> DMat3 {
     let d = match *shape {
         Shape::Ball { radius } => DVec3::splat(0.4 * mass * radius * radius),
-        Shape::Cuboid { half_extents: h } => {
-            DVec3::new(h.y * h.y + h.z * h.z, h.x * h.x + h.z * h.z, h.x * h.x + h.y * h.y) * (mass / 3.0)
-        }
+        Shape::Cuboid { half_extents: h } => DVec3::new(h.y * h.y + h.z * h.z, h.x * h.x + h.z * h.z, h.x * h.x + h.y * h.y) * (mass / 3.0),
         Shape::Cylinder { radius: r, half_height: hh } => {
             let side = mass * (3.0 * r * r + 4.0 * hh * hh) / 12.0;
             DVec3::new(side, 0.5 * mass * r * r, side)
@@ -319,10 +317,8 @@ fn body_motion(b: &scenario::Body) -> BodyMotion {
 /// The core's spec of a scenario cable.
 fn cable_spec(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, rapier: &RapierWorld) -> CableSpec {
     let section = RopeSection { linear_density: c.linear_density, ea: c.ea, ei: c.ei, ei2: c.ei2, gj: c.gj, min_breaking_load: 0.0 };
-    let mut rope = RopeBuilder::new(c.length, c.segments as usize, section, c.diameter)
-        .damping(c.damping)
-        .gravity(sc.simulation.gravity)
-        .stress_free_shape(c.stress_free);
+    let mut rope =
+        RopeBuilder::new(c.length, c.segments as usize, section, c.diameter).damping(c.damping).gravity(sc.simulation.gravity).stress_free_shape(c.stress_free);
     if let Some(ga) = c.shear_stiffness {
         rope = rope.shear_stiffness(ga);
     }
@@ -341,7 +337,14 @@ fn cable_spec(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, rapier: &Rapi
         }),
         _ => None,
     };
-    CableSpec { rope, path: Some(c.path.clone()), start: attach(&c.start), end: attach(&c.end), scheme: scheme.clone(), exact: [exact(&c.start), exact(&c.end)] }
+    CableSpec {
+        rope,
+        path: Some(c.path.clone()),
+        start: attach(&c.start),
+        end: attach(&c.end),
+        scheme: scheme.clone(),
+        exact: [exact(&c.start), exact(&c.end)],
+    }
 }
 
 impl World {
@@ -398,7 +401,8 @@ impl World {
         let built = core.add(&specs, &mut rapier.pw.bodies, &mut rapier.pw.impulse_joints, &motions);
         let name_of = |rapier: &RapierWorld, h| rapier.bodies.iter().find(|b| b.handle == h).map_or("?".to_string(), |b| b.name.clone());
         // The first error that is not only a consequence of another (an island member's).
-        let first_error = built.iter().position(|r| matches!(r, Err(e) if !matches!(e, CouplingError::Island { .. }))).or_else(|| built.iter().position(|r| r.is_err()));
+        let first_error =
+            built.iter().position(|r| matches!(r, Err(e) if !matches!(e, CouplingError::Island { .. }))).or_else(|| built.iter().position(|r| r.is_err()));
         if let Some(k) = first_error {
             let c = &scenario.cables[k];
             let Err(e) = &built[k] else { unreachable!("an error") };
@@ -409,11 +413,14 @@ impl World {
                         (_, CableEnd::Body { body, clamp: true, .. }) | (CableEnd::Body { body, clamp: true, .. }, _) => body.as_str(),
                         _ => "?",
                     };
-                    unsupported(c.location, if why.starts_with("a dynamic") {
-                        format!("cable `{}` with an end clamped to body `{body}`, which rapier keeps (a dynamic body held by joints or other cables: the end spring's orientation hold has a fixed target; clamp the `start` instead, or leave the end pinned)", c.name)
-                    } else {
-                        format!("cable `{}` with an end clamped to spinning body `{body}` (clamp the `start` instead)", c.name)
-                    })
+                    unsupported(
+                        c.location,
+                        if why.starts_with("a dynamic") {
+                            format!("cable `{}` with an end clamped to body `{body}`, which rapier keeps (a dynamic body held by joints or other cables: the end spring's orientation hold has a fixed target; clamp the `start` instead, or leave the end pinned)", c.name)
+                        } else {
+                            format!("cable `{}` with an end clamped to spinning body `{body}` (clamp the `start` instead)", c.name)
+                        },
+                    )
                 }
                 e @ (CouplingError::HubLoop { .. } | CouplingError::Island { .. }) => {
                     let message = e.describe(&|h| format!("body `{}`", name_of(&rapier, h)), &|k| format!("cable `{}`", scenario.cables[k].name));
@@ -561,7 +568,9 @@ impl World {
             .cables
             .iter()
             .zip(&self.names)
-            .flat_map(|(cc, n)| cc.followers.iter().filter(|f| f.dynamic).map(move |f| (n.ropes[0].as_str(), name(f.body), f.start, f.reaction.0, f.reaction.1)))
+            .flat_map(|(cc, n)| {
+                cc.followers.iter().filter(|f| f.dynamic).map(move |f| (n.ropes[0].as_str(), name(f.body), f.start, f.reaction.0, f.reaction.1))
+            })
             .collect()
     }
 
