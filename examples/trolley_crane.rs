@@ -87,7 +87,7 @@ fn report(
     }
     let (Ok(state), Ok(t), Ok(p)) = (cables.single(), trolley.single(), payload.single()) else { return };
     let step = (state.time * 60.0).round() as u64;
-    if step % 60 == 0 {
+    if step.is_multiple_of(60) {
         let sway = (p.translation.x - t.translation.x).atan2(t.translation.y - p.translation.y).to_degrees();
         println!(
             "t = {:5.2} s  trolley x = {:6.3} m  sway = {:6.2}°  top tension = {:7.0} N  ({} Newton iterations)",

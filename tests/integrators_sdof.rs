@@ -408,8 +408,8 @@ fn amplification(scheme: &Scheme, omega: f64, h: f64) -> Vec<Vec<f64>> {
         let mut integ = Integrator::new(scheme.clone()).with_substeps(Substeps::Unchecked(1));
         integ.step(&mut sys, &mut state, h).expect("one step");
         let out = [state.q[0], state.v[0], if third == Some(true) { state.a_hat[0] } else { state.a[0] }];
-        for i in 0..n {
-            m[i][j] = out[i];
+        for (row, &o) in m.iter_mut().zip(&out) {
+            row[j] = o;
         }
     }
     m
@@ -993,10 +993,10 @@ fn linearly_implicit_preset_is_one_solve_per_step_and_stable() {
 fn ramp_load_converges_at_the_scheme_order() {
     // m ẍ + c ẋ + k x = F₀ t has x_p = (F₀/k)(t − c/k); the rest is a damped
     // free vibration. A load evaluated at the wrong stage time drops the order.
-    let (m, c, k, f0) = (1.0, 0.4, 25.0, 10.0);
+    let (m, c, k, f0): (f64, f64, f64, f64) = (1.0, 0.4, 25.0, 10.0);
     let (x0, v0) = (0.5, 0.0);
     let exact = |t: f64| {
-        let (wn, z) = ((k / m as f64).sqrt(), c / (2.0 * (k * m as f64).sqrt()));
+        let (wn, z) = ((k / m).sqrt(), c / (2.0 * (k * m).sqrt()));
         let wd = wn * (1.0 - z * z).sqrt();
         let (u0, du0) = (x0 + f0 * c / (k * k), v0 - f0 / k);
         let u = (-z * wn * t).exp() * (u0 * (wd * t).cos() + (du0 + z * wn * u0) / wd * (wd * t).sin());
