@@ -523,6 +523,7 @@ fn steel_rod(n: usize, diameter_for_inertia: f64, start: RopeStart) -> RopeModel
     let g = e / (2.0 * (1.0 + nu));
     let sec = section(rho * area, e * area, e * i, g * 2.0 * i);
     RopeBuilder::new(1.0, n, sec, diameter_for_inertia)
+        .tension_only(false) // a rod: K = diag(k) needs the linear axial law
         .shear_stiffness(1e4 * e * area)
         .path(vec![DVec3::ZERO, DVec3::X])
         .start(start)

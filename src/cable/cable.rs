@@ -24,6 +24,17 @@ pub enum CableError {
         /// What the static solver reported.
         source: StaticError,
     },
+    /// [`Cable::solve_static`] on a tension-only rope: the equilibrium on
+    /// the taut branch needs an element to push, which a rope cannot.
+    #[error("static equilibrium needs element {element} of rope {rope} to push with {compression:.4e} N: a rope cannot (use `tension_only(false)` for a rod or beam)")]
+    Compressed {
+        /// Rope of the chain ([`Cable::rope`]; 0 for a single rope).
+        rope: usize,
+        /// Element index from that rope's start, as its user described it.
+        element: usize,
+        /// The compressive force it would carry on the linear law, N (> 0).
+        compression: f64,
+    },
     /// [`Cable::set_link_velocities`]: a velocity the chain cannot take
     /// (e.g. a trolley moving across its rail), or a bad target.
     #[error("cannot give link {link} its velocity: {reason}")]
@@ -351,6 +362,18 @@ impl Cable {
         true
     }
 
+    /// The rope and element (from that rope's start, in its user's
+    /// direction) whose sub-joints include `joint`.
+    fn element_of_joint(&self, joint: usize) -> Option<(usize, usize)> {
+        (0..=self.model.parts.len()).find_map(|rope| {
+            let view = self.rope(rope)?;
+            let l = view.layout();
+            let n = l.elements;
+            let i = joint.checked_sub(l.first)? / ELEMENT_DOFS;
+            (i < n).then(|| (rope, if view.reversed() { n - 1 - i } else { i }))
+        })
+    }
+
     /// Replaces the state by the static equilibrium at the current time:
     /// gravity, the current loads and the held ends (a moving base counts
     /// with its motion at this instant). Gravity acts from the start; the
@@ -379,6 +402,11 @@ impl Cable {
                 Err(source) => {
                     self.model.chain.loads = full;
                     self.refresh();
+                    if let StaticError::Compressed { joint, force } = source {
+                        if let Some((rope, element)) = self.element_of_joint(joint) {
+                            return Err(CableError::Compressed { rope, element, compression: -force });
+                        }
+                    }
                     return Err(CableError::Static { step, steps, source });
                 }
             }

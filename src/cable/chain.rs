@@ -109,11 +109,17 @@ pub enum SpringLaw {
     /// `f = k x + c v` for every `x` (rods, beams, shear, bending).
     #[default]
     Linear,
-    /// `f = k x + c v` while `x > 0`, and `f = 0` once `x ≤ 0`: a rope
-    /// carries no compression and its slack part no damping. The law has a
-    /// kink at `x = 0` (not smoothed: the force is exact); Newton uses the
-    /// one-sided tangent (`k`, `c` when taut, zero when slack) with a line
-    /// search (`integrate::NewtonSettings`).
+    /// `f = max(0, k x + c v)`: a rope never pushes, neither with its
+    /// spring nor with its damper. Without damping this is `k x` while
+    /// stretched (`x > 0`) and zero once slack. With damping the spring and
+    /// damper are clamped together, so the force is continuous and
+    /// nondecreasing in the step's unknown (an element closing faster
+    /// than `x/τ`, `τ = c/k`, goes slack a little before `x = 0`; one
+    /// opening fast pulls a little before it), which keeps Newton's
+    /// problem well posed: clamping the spring alone would make the force
+    /// jump by `c v` at `x = 0`. The kink is not smoothed (the force is
+    /// exact); Newton freezes each law on one branch per solve
+    /// (`SecondOrderSystem::freeze_branches`).
     TensionOnly,
 }
 
@@ -123,7 +129,7 @@ impl SubJoint {
     /// N·m·s/rad).
     #[inline]
     pub fn spring_force(&self, q: f64, v: f64) -> (f64, f64, f64) {
-        self.spring_force_on_branch(q, v, q - self.rest > 0.0)
+        self.spring_force_on_branch(q, v, self.is_taut(q, v))
     }
 
     /// [`SubJoint::spring_force`] with the law held on one branch: `taut`
@@ -137,11 +143,22 @@ impl SubJoint {
         }
     }
 
-    /// Whether the law is on its taut branch at `q` (always for a linear
-    /// law; a tension-only spring at exactly zero extension counts as taut,
-    /// so a rope laid straight and unstrained starts taut).
-    pub fn is_taut(&self, q: f64) -> bool {
-        self.law == SpringLaw::Linear || q - self.rest >= 0.0
+    /// Whether the law is on its taut branch at `(q, v)` (always for a
+    /// linear law; a tension-only spring pulls when `k x + c v > 0`).
+    pub fn is_taut(&self, q: f64, v: f64) -> bool {
+        self.law == SpringLaw::Linear || self.taut_measure(q, v) > 0.0
+    }
+
+    /// `(k x + c v)/k` (m or rad): the extension the spring and damper pull
+    /// with together; its sign decides a tension-only law's branch.
+    #[inline]
+    pub(crate) fn taut_measure(&self, q: f64, v: f64) -> f64 {
+        let x = q - self.rest;
+        if self.stiffness > 0.0 {
+            x + self.damping / self.stiffness * v
+        } else {
+            x
+        }
     }
 
     /// The joint frame (orientation, origin) in the frame of the parent
@@ -313,6 +330,11 @@ impl LimbCarry {
         self.bias += o.bias;
     }
 }
+
+/// Slack (m) within which a tension-only element starts a Newton solve on
+/// its taut branch ([`SecondOrderSystem::freeze_branches`]): a rope laid
+/// from coordinates rounded to the micrometre starts taut.
+const TAUT_BAND: f64 = 1e-6;
 
 /// The exact inputs of the link-slot layout: sub-joint count, the links of
 /// the loads then the anchors (in order), the rotation springs' first
@@ -1220,19 +1242,30 @@ impl SecondOrderSystem for Chain {
     fn position_tolerance(&self) -> f64 {
         self.position_tolerance
     }
-    fn freeze_branches(&mut self, q: &[f64]) {
+    fn freeze_branches(&mut self, start: &[f64], predicted: &[f64]) {
         self.assign_slots();
         if self.nonsmooth.is_empty() {
             return;
         }
         self.branch.resize(self.joints.len(), 1);
+        // Taut unless both the step's start and the predictor are slack by
+        // more than `TAUT_BAND` (or the position tolerance): an
+        // element at its kink (unstrained, or laid from rounded coordinates)
+        // is taken taut, and the predictor's round-off (its acceleration on
+        // a light element between heavy ones) cannot start it slack. A
+        // wrong guess costs one branch update; starting a barely slack rope
+        // slack would cost one update per element, as the pull reaches each
+        // element only once the one above it is taut.
+        let tol = self.position_tolerance;
         for &s in &self.nonsmooth {
             let s = s as usize;
-            self.branch[s] = u8::from(self.joints[s].is_taut(q[s]));
+            let rest = self.joints[s].rest;
+            let band = tol.max(TAUT_BAND);
+            self.branch[s] = u8::from(start[s] - rest >= -band || predicted[s] - rest >= -band);
         }
         self.frozen = true;
     }
-    fn update_branches(&mut self, q: &[f64]) -> usize {
+    fn update_branches(&mut self, q: &[f64], v: &[f64]) -> usize {
         if !self.frozen {
             return 0;
         }
@@ -1240,7 +1273,7 @@ impl SecondOrderSystem for Chain {
         let mut moved = 0;
         for &s in &self.nonsmooth {
             let s = s as usize;
-            let x = q[s] - self.joints[s].rest;
+            let x = self.joints[s].taut_measure(q[s], v[s]);
             let b = &mut self.branch[s];
             if (*b != 0 && x < -tol) || (*b == 0 && x > tol) {
                 *b ^= 1;
@@ -1248,6 +1281,20 @@ impl SecondOrderSystem for Chain {
             }
         }
         moved
+    }
+    fn branch_disagreement(&self, q: &[f64], v: &[f64]) -> f64 {
+        if !self.frozen {
+            return 0.0;
+        }
+        let mut worst: f64 = 0.0;
+        for &s in &self.nonsmooth {
+            let s = s as usize;
+            let x = self.joints[s].taut_measure(q[s], v[s]);
+            if (self.branch[s] != 0) != (x > 0.0) {
+                worst = worst.max(x.abs());
+            }
+        }
+        worst
     }
     fn release_branches(&mut self) {
         self.frozen = false;
@@ -1510,6 +1557,14 @@ pub enum StaticError {
         /// Largest residual component left, N or N·m.
         residual: f64,
     },
+    /// The equilibrium found needs a tension-only (rope) element to push.
+    #[error("the equilibrium needs sub-joint {joint} of a tension-only rope to push with {force:.6e} N (a rope cannot; use the compression option for a rod or beam)")]
+    Compressed {
+        /// Sub-joint index of the most compressed axial slide.
+        joint: usize,
+        /// Its force on the linear law (negative: compression), N.
+        force: f64,
+    },
 }
 
 impl Chain {
@@ -1525,7 +1580,32 @@ impl Chain {
     /// rad) and a full Newton step (`c → ∞`) from there would not either;
     /// this is independent of the residual's round-off floor (stiff anchor
     /// springs make it large in newtons).
+    ///
+    /// Tension-only laws are solved on their taut branch (a rope at rest
+    /// under gravity and loads is taut wherever it is straight or hangs);
+    /// an equilibrium that needs a tension-only element to push by more
+    /// than `tol` is refused ([`StaticError::Compressed`]).
     pub fn solve_static(&mut self, t: f64, q: &mut [f64], tol: f64, max_iterations: usize) -> Result<usize, StaticError> {
+        self.freeze_taut();
+        let result = self.solve_static_on_branches(t, q, tol, max_iterations);
+        self.frozen = false;
+        let iterations = result?;
+        let compressed = self.nonsmooth.iter().map(|&s| s as usize).map(|s| (s, q[s] - self.joints[s].rest)).min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((joint, x)) = compressed.filter(|&(_, x)| x < -tol) {
+            return Err(StaticError::Compressed { joint, force: self.joints[joint].stiffness * x });
+        }
+        Ok(iterations)
+    }
+
+    /// Every tension-only law frozen on its taut branch (the linear law).
+    fn freeze_taut(&mut self) {
+        self.assign_slots();
+        self.branch.clear();
+        self.branch.resize(self.joints.len(), 1);
+        self.frozen = !self.nonsmooth.is_empty();
+    }
+
+    fn solve_static_on_branches(&mut self, t: f64, q: &mut [f64], tol: f64, max_iterations: usize) -> Result<usize, StaticError> {
         let n = self.len();
         let zero = vec![0.0; n];
         let mut r = vec![0.0; n];
@@ -1576,7 +1656,17 @@ impl Chain {
     /// linearised at `(t, q)` at rest: power iteration on `M⁻¹ K_t`, with
     /// `K_t x` from central differences of the residual and `M⁻¹` from the
     /// O(n) solve (O(n) per iteration). Used to choose explicit sub-steps.
+    /// Tension-only laws count on their taut (stiff) branch: the
+    /// differences would straddle the kink of an unstrained element.
     pub fn estimate_max_frequency(&mut self, t: f64, q: &[f64], iterations: usize) -> Result<f64, SystemError> {
+        self.freeze_taut();
+        let result = self.power_iteration(t, q, iterations);
+        self.frozen = false;
+        Ok(result?.max(0.0).sqrt())
+    }
+
+    /// The largest eigenvalue of `M⁻¹ K_t` by power iteration (1/s²).
+    fn power_iteration(&mut self, t: f64, q: &[f64], iterations: usize) -> Result<f64, SystemError> {
         let n = self.len();
         let zero = vec![0.0; n];
         let (mut rp, mut rm, mut y) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -1597,11 +1687,10 @@ impl Chain {
             let kx: Vec<f64> = rp.iter().zip(&rm).map(|(a, b)| (a - b) / (2.0 * eps)).collect();
             self.residual_into(t, q, &zero, &zero, &mut rp)?;
             self.solve_into(0.0, 0.0, &kx, &mut y)?;
-            let ny = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            lambda = ny;
+            lambda = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             std::mem::swap(&mut x, &mut y);
         }
-        Ok(lambda.max(0.0).sqrt())
+        Ok(lambda)
     }
 }
 

@@ -267,7 +267,8 @@ impl RopeBuilder {
     /// A rope of unstretched length `length` (m) cut into `segments`
     /// elements, with section `section` and diameter `diameter` (m).
     /// Defaults: pinned at the world origin, free end, hanging straight
-    /// down, no damping, gravity −9.81 m/s² along y, shear stiffness GA = EA.
+    /// down, no damping, gravity −9.81 m/s² along y, shear stiffness GA = EA,
+    /// tension-only axial law ([`RopeBuilder::tension_only`]).
     pub fn new(length: f64, segments: usize, section: RopeSection, diameter: f64) -> Self {
         RopeBuilder {
             length,
@@ -282,7 +283,7 @@ impl RopeBuilder {
             gravity: DVec3::new(0.0, -9.81, 0.0),
             end_stiffness_factor: 1e3,
             stress_free_shape: false,
-            tension_only: false,
+            tension_only: true,
             linear_damping: 0.0,
             angular_damping: 0.0,
         }
@@ -309,10 +310,12 @@ impl RopeBuilder {
     /// stay), so a payload placed closer to the anchor than the rope length
     /// falls until the rope is taut instead of being pushed away.
     ///
-    /// Default `false` (the linear law, which also pushes: right for rods and
-    /// beams). Tension-only is not the default yet: Newton's active set can
-    /// cycle on elements that sit at the kink (a payload released on an
-    /// unstrained rope; `docs/architecture.md`, "Slack").
+    /// Default `true`: a wire rope, chain or fibre line. `false` keeps the
+    /// linear law in compression too, for rods and beams (a cantilever, a
+    /// pre-curved hose that must push). Newton solves the kink by an active
+    /// set frozen per solve (`docs/architecture.md`, "Slack"); a static
+    /// solve ([`Cable::solve_static`](super::Cable::solve_static)) takes the
+    /// taut branch and refuses an equilibrium that needs the rope to push.
     pub fn tension_only(mut self, yes: bool) -> Self {
         self.tension_only = yes;
         self

@@ -68,6 +68,7 @@ fn loaded_rope(end: RopeEnd, clamp: bool) -> RopeModel {
     let base = BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO));
     let start = if clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) };
     let mut m = RopeBuilder::new(1.2, 5, soft_section(), 0.05)
+        .tension_only(false)
         .path(bent_path())
         .start(start)
         .end(end)
@@ -199,7 +200,7 @@ fn small_angle_sin_cos_is_exact_to_round_off() {
 fn fused_and_separate_solves_agree() {
     let mut m = loaded_rope(payload(), true);
     m.chain.rotation_springs = {
-        let mut b = RopeBuilder::new(1.2, 5, soft_section(), 0.05).path(bent_path()).build().unwrap();
+        let mut b = RopeBuilder::new(1.2, 5, soft_section(), 0.05).tension_only(false).path(bent_path()).build().unwrap();
         std::mem::take(&mut b.chain.rotation_springs)
     };
     let link = m.layout.dof(2, 2);
@@ -237,8 +238,12 @@ fn fused_and_separate_solves_agree() {
 #[test]
 fn link_update_agrees_with_the_sum_to_first_order() {
     let end = bent_path().last().copied().unwrap();
-    let mut model =
-        RopeBuilder::new(1.8, 12, soft_section(), 0.02).path(bent_path()).end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO)))).build().unwrap();
+    let mut model = RopeBuilder::new(1.8, 12, soft_section(), 0.02)
+        .tension_only(false)
+        .path(bent_path())
+        .end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO))))
+        .build()
+        .unwrap();
     let n = model.chain.len();
     let mut rng = Lcg(7);
     let q: Vec<f64> = model.q0.iter().map(|x| x + 0.02 * rng.next()).collect();
@@ -283,6 +288,7 @@ fn link_update_agrees_with_the_sum_to_first_order() {
 fn tail(base: BaseMotion) -> RopeModel {
     let apex = base.at(0.0).position;
     RopeBuilder::new(0.62, 3, soft_section(), 0.05)
+        .tension_only(false)
         .start(RopeStart::Pinned(base))
         .path(vec![apex, apex + DVec3::new(-0.2, -0.5, 0.3)])
         .gravity(DVec3::new(0.3, -9.81, 0.2))
@@ -307,6 +313,7 @@ fn tangent_matches_finite_differences_on_a_tree() {
         let pin: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |_| (apex + DVec3::new(0.8, 0.7, -0.1), DVec3::ZERO));
         let base = BaseMotion::Fixed(BaseState::fixed(DMat3::from_rotation_y(0.4), apex));
         let leg = RopeBuilder::new(1.1, 4, soft_section(), 0.05)
+            .tension_only(false)
             .start(RopeStart::Pinned(base.clone()))
             .path(vec![apex, apex + DVec3::new(0.3, 0.4, 0.0), apex + DVec3::new(0.8, 0.7, -0.1)])
             .end(RopeEnd::Pinned(pin))

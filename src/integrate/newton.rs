@@ -82,10 +82,13 @@ pub(crate) struct Affine {
 /// coordinates and velocities.
 ///
 /// Non-smooth laws (tension-only rope elements) are solved by an active
-/// set: Newton runs on the branches frozen at the starting point
-/// ([`SecondOrderSystem::freeze_branches`]); once it converges, every law
-/// whose branch disagrees with the solution changes branch and Newton goes
-/// on, with a fresh iteration budget, up to [`MAX_BRANCH_UPDATES`] times.
+/// set: Newton runs on the branches frozen from the step's start `start`
+/// and the starting iterate ([`SecondOrderSystem::freeze_branches`]); once
+/// it converges, every law whose branch disagrees with the solution changes
+/// branch and Newton goes on, with a fresh iteration budget, up to
+/// [`MAX_BRANCH_UPDATES`] times. A solution whose branches then still
+/// disagree by more than [`KINK_BAND`] is not accepted: the step fails as
+/// not converged (and the fallback splits it).
 pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     ws: &mut Workspace,
@@ -93,18 +96,29 @@ pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
     settings: &NewtonSettings,
     one_shot: bool,
     stats: &mut StepStats,
+    start: &[f64],
 ) -> Result<(), Failure> {
     update_coordinates(ws, map.c_q, map.c_v);
-    sys.freeze_branches(&ws.q);
+    sys.freeze_branches(start, &ws.q);
     let mut result = iterate(sys, ws, map, settings, one_shot, stats);
     if !one_shot {
-        // Branch updates until the branches agree with the solution; if they
-        // still disagree after the last update (a law sitting at its kink
-        // can make the active set cycle), the solution on the frozen
-        // branches is kept: the disagreeing laws change branch at the next
-        // step (an active set frozen for one step).
+        // Branch updates until the branches agree with the solution. After
+        // the last update, laws still within `KINK_BAND` of their kink (a
+        // run of elements near zero tension, whose branches chatter) are
+        // accepted on the branch they are on; a larger disagreement (a
+        // slack element that should carry the load) fails the solve, and
+        // the step is split.
         let mut updates = 0;
-        while result.is_ok() && updates < MAX_BRANCH_UPDATES && sys.update_branches(&ws.q) > 0 {
+        while result.is_ok() {
+            if updates == MAX_BRANCH_UPDATES {
+                if sys.branch_disagreement(&ws.q, &ws.v) > KINK_BAND {
+                    result = Err(Failure::NotConverged { iterations: settings.max_iterations.max(1) });
+                }
+                break;
+            }
+            if sys.update_branches(&ws.q, &ws.v) == 0 {
+                break;
+            }
             updates += 1;
             stats.branch_updates += 1;
             result = iterate(sys, ws, map, settings, false, stats);
@@ -116,6 +130,13 @@ pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
 
 /// Most branch updates of non-smooth laws in one Newton solve.
 pub const MAX_BRANCH_UPDATES: usize = 3;
+
+/// Largest disagreement (m or rad, the law's own measure: a tension-only
+/// element's `x + (c/k) v`) between a law's frozen branch and the solution
+/// that a Newton solve accepts after [`MAX_BRANCH_UPDATES`] updates. A
+/// micrometre: such an element misses or adds at most `k·1e-6` (N), and it
+/// is re-frozen at the next step.
+pub const KINK_BAND: f64 = 1e-6;
 
 /// Newton iterations on the current (frozen) laws.
 fn iterate<S: SecondOrderSystem + ?Sized>(

@@ -91,17 +91,26 @@ pub trait SecondOrderSystem {
     }
 
     /// Non-smooth laws (a slack rope's tension-only elements; contact
-    /// next): freeze each law on the branch it is on at `q` (taut or slack),
-    /// so that Newton solves a smooth system. Called by the implicit
-    /// schemes at the start of each Newton solve. Default: nothing to freeze.
-    fn freeze_branches(&mut self, _q: &[f64]) {}
+    /// next): freeze each law on a branch (taut or slack) chosen from the
+    /// coordinates at the start of the step, `start`, and the predicted
+    /// ones, `predicted`, so that Newton solves a smooth system. Called by
+    /// the implicit schemes at the start of each Newton solve. Default:
+    /// nothing to freeze.
+    fn freeze_branches(&mut self, _start: &[f64], _predicted: &[f64]) {}
 
     /// After Newton converged on the frozen branches: moves every law whose
-    /// branch disagrees with `q` (beyond the position tolerance) to the
-    /// other branch and returns how many moved (0: the converged point
+    /// branch disagrees with `(q, v)` (beyond the position tolerance) to
+    /// the other branch and returns how many moved (0: the converged point
     /// solves the exact, non-smooth equations). Default 0.
-    fn update_branches(&mut self, _q: &[f64]) -> usize {
+    fn update_branches(&mut self, _q: &[f64], _v: &[f64]) -> usize {
         0
+    }
+
+    /// The largest disagreement between a frozen branch and `(q, v)`, in
+    /// the law's own measure (m or rad; 0 when every branch agrees).
+    /// Default 0.
+    fn branch_disagreement(&self, _q: &[f64], _v: &[f64]) -> f64 {
+        0.0
     }
 
     /// Back to the exact laws (end of the Newton solve). Default: nothing.

@@ -54,6 +54,10 @@ pub struct CableDescriptor {
     pub shear_stiffness: Option<f64>,
     /// Stiffness-proportional damping time constant, s.
     pub damping: f64,
+    /// Tension-only axial law (default `true`: a rope cannot push);
+    /// `false` keeps compression, for rods and beams
+    /// ([`RopeBuilder::tension_only`](crate::cable::RopeBuilder::tension_only)).
+    pub tension_only: bool,
     /// Initial centreline (world, m); default straight from start to end, or
     /// straight down from the start when the end is free or on a body.
     pub path: Option<Vec<Vec3>>,
@@ -67,9 +71,21 @@ pub struct CableDescriptor {
 
 impl CableDescriptor {
     /// A cable of `length` m with `segments` elements of `section`, from
-    /// `start` to `end`, generalized-α, undamped.
+    /// `start` to `end`, generalized-α, undamped, tension-only.
     pub fn new(length: f64, segments: usize, section: RopeSection, diameter: f64, start: CableAnchor, end: CableAnchor) -> Self {
-        CableDescriptor { length, segments, section, diameter, shear_stiffness: None, damping: 0.0, path: None, start, end, scheme: Scheme::default() }
+        CableDescriptor {
+            length,
+            segments,
+            section,
+            diameter,
+            shear_stiffness: None,
+            damping: 0.0,
+            tension_only: true,
+            path: None,
+            start,
+            end,
+            scheme: Scheme::default(),
+        }
     }
 }
 

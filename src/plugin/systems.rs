@@ -59,7 +59,7 @@ pub(crate) fn init_cables(
                 continue;
             }
         };
-        let mut rope = RopeBuilder::new(d.length, d.segments, d.section, d.diameter).damping(d.damping).gravity(gravity);
+        let mut rope = RopeBuilder::new(d.length, d.segments, d.section, d.diameter).damping(d.damping).tension_only(d.tension_only).gravity(gravity);
         if let Some(ga) = d.shear_stiffness {
             rope = rope.shear_stiffness(ga);
         }

@@ -78,6 +78,7 @@ fn cable(ctx: &Ctx<'_>, raw: &S<RawCable>, bodies: &[Body], seen: &mut HashMap<S
         contacts: r.contacts.as_ref().is_none_or(|c| *c.get_ref()),
         loads: loads(ctx, r, o, length)?,
         stress_free: r.stress_free.as_ref().is_some_and(|c| *c.get_ref()),
+        tension_only: r.tension_only.as_ref().is_none_or(|c| *c.get_ref()),
         location: ctx.loc(raw.span()),
     })
 }

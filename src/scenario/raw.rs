@@ -204,6 +204,7 @@ pub(crate) struct RawCable {
     pub contacts: Option<S<bool>>,
     pub loads: Option<S<Vec<S<RawLoad>>>>,
     pub stress_free: Option<S<bool>>,
+    pub tension_only: Option<S<bool>>,
 }
 
 /// One entry of a cable's `loads = [{ s, force, moment }, ...]`.

@@ -501,6 +501,9 @@ pub struct Cable {
     /// The `path` is the stress-free shape (a pre-curved beam) instead of
     /// a deformed straight cable (extension; default false).
     pub stress_free: bool,
+    /// The axial law is tension-only: a rope cannot push (extension;
+    /// default true). `false` keeps compression, for rods and beams.
+    pub tension_only: bool,
     /// Where the `[[cable]]` table starts.
     pub location: Location,
 }

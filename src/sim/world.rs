@@ -77,7 +77,8 @@
 //!   is an anchor spring to the turning point (a clamped end is refused).
 //!   A cable's `loads` are constant point loads on its chain
 //!   ([`Cable::add_point_load_and_moment`]); `stress_free` maps to
-//!   [`RopeBuilder::stress_free_shape`]; `[simulation] statics = true` puts
+//!   [`RopeBuilder::stress_free_shape`] and `tension_only` (default true) to
+//!   [`RopeBuilder::tension_only`]; `[simulation] statics = true` puts
 //!   every cable into its static equilibrium before t = 0 (rapier bodies
 //!   held where they are; [`Cable::solve_static`], [`STATIC_TOLERANCE`],
 //!   [`STATIC_MAX_ITERATIONS`]), or fails with [`SimError::Static`].
@@ -317,8 +318,11 @@ fn body_motion(b: &scenario::Body) -> BodyMotion {
 /// The core's spec of a scenario cable.
 fn cable_spec(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, rapier: &RapierWorld) -> CableSpec {
     let section = RopeSection { linear_density: c.linear_density, ea: c.ea, ei: c.ei, ei2: c.ei2, gj: c.gj, min_breaking_load: 0.0 };
-    let mut rope =
-        RopeBuilder::new(c.length, c.segments as usize, section, c.diameter).damping(c.damping).gravity(sc.simulation.gravity).stress_free_shape(c.stress_free);
+    let mut rope = RopeBuilder::new(c.length, c.segments as usize, section, c.diameter)
+        .damping(c.damping)
+        .gravity(sc.simulation.gravity)
+        .stress_free_shape(c.stress_free)
+        .tension_only(c.tension_only);
     if let Some(ga) = c.shear_stiffness {
         rope = rope.shear_stiffness(ga);
     }
