@@ -509,6 +509,14 @@ fn stress_free_is_a_boolean() {
 }
 
 #[test]
+fn tension_only_is_a_boolean_that_defaults_to_true() {
+    cable_err("tension_only = \"no\"", "\"no\"", "invalid type: string \"no\", expected a boolean");
+    assert!(parse(BASE, "base.toml").unwrap().cables[0].tension_only);
+    let s = parse(&format!("{BASE}tension_only = false\n"), "rod.toml").unwrap();
+    assert!(!s.cables[0].tension_only);
+}
+
+#[test]
 fn statics_fields_are_validated() {
     let with = |sim: &str| replace("dt = 0.01\n", &format!("dt = 0.01\n{sim}\n"));
     check(&with("statics = \"yes\""), 4, 11, "invalid type: string \"yes\", expected a boolean");

@@ -326,7 +326,10 @@ impl RopeBuilder {
         self
     }
     /// Stiffness-proportional damping time constant τ, s: every joint
-    /// spring k gets a damper τ·k.
+    /// spring k gets a damper τ·k. On a tension-only rope the axial damper
+    /// is clamped with its spring (`max(0, k u + τ k u̇)`); a rope that
+    /// unloads faster than `u/τ` (a payload rebounding from a snap) can
+    /// make Newton fail (`docs/architecture.md`, "Slack").
     pub fn damping(mut self, tau: f64) -> Self {
         self.damping = tau;
         self
