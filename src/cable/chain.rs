@@ -1558,7 +1558,7 @@ pub enum StaticError {
         residual: f64,
     },
     /// The equilibrium found needs a tension-only (rope) element to push.
-    #[error("the equilibrium needs sub-joint {joint} of a tension-only rope to push with {force:.6e} N (a rope cannot; use the compression option for a rod or beam)")]
+    #[error("the equilibrium needs sub-joint {joint} of a tension-only rope to push with {force:.6e} N (a rope cannot; `tension_only(false)` keeps compression for a rod or beam)")]
     Compressed {
         /// Sub-joint index of the most compressed axial slide.
         joint: usize,
