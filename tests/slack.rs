@@ -16,9 +16,16 @@ fn steel20() -> RopeSection {
 /// laid straight (so for `drop` < 20 m the elements overlap: the rope is
 /// slack).
 fn payload_on_straight_rope(drop: f64, tension_only: bool) -> Cable {
+    payload_on_straight(20.0, 40, drop, tension_only)
+}
+
+/// A 1 t sphere (r = 0.3 m) on a ball joint at the end of a `length` m
+/// steel rope of `segments` elements laid straight down from the origin to
+/// the attachment `drop` m below it.
+fn payload_on_straight(length: f64, segments: usize, drop: f64, tension_only: bool) -> Cable {
     let attach = DVec3::new(0.0, -drop, 0.0);
     let body = LumpedBody::sphere(1000.0, 0.3, attach - DVec3::new(0.0, 0.3, 0.0));
-    let model = RopeBuilder::new(20.0, 40, steel20(), 0.02)
+    let model = RopeBuilder::new(length, segments, steel20(), 0.02)
         .end(RopeEnd::Body { body, anchor: DVec3::new(0.0, 0.3, 0.0), clamp: false })
         .path(vec![DVec3::ZERO, attach])
         .tension_only(tension_only)
@@ -349,14 +356,7 @@ fn slack_drop_snaps_taut_at_the_energy_balance_peak() {
     let w = m * G;
     let peak_ref = w + (w * w + 2.0 * w * fall * k).sqrt();
     for (h, tolerance) in [(5e-4, 0.10), (1.0 / 60.0, 1.0)] {
-        let attach = DVec3::new(0.0, -drop, 0.0);
-        let body = LumpedBody::sphere(m, 0.3, attach - DVec3::new(0.0, 0.3, 0.0));
-        let model = RopeBuilder::new(l, 20, section, 0.02)
-            .end(RopeEnd::Body { body, anchor: DVec3::new(0.0, 0.3, 0.0), clamp: false })
-            .path(vec![DVec3::ZERO, attach])
-            .build()
-            .unwrap();
-        let mut cable = Cable::new(model, Scheme::default()).unwrap();
+        let mut cable = payload_on_straight(l, 20, drop, true);
         let payload = cable.model.layout.end_body.unwrap();
         let y0 = cable.model.body_state(&payload).0.y;
         let n = cable.elements();

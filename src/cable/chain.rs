@@ -1256,11 +1256,10 @@ impl SecondOrderSystem for Chain {
         // wrong guess costs one branch update; starting a barely slack rope
         // slack would cost one update per element, as the pull reaches each
         // element only once the one above it is taut.
-        let tol = self.position_tolerance;
+        let band = self.position_tolerance.max(TAUT_BAND);
         for &s in &self.nonsmooth {
             let s = s as usize;
             let rest = self.joints[s].rest;
-            let band = tol.max(TAUT_BAND);
             self.branch[s] = u8::from(start[s] - rest >= -band || predicted[s] - rest >= -band);
         }
         self.frozen = true;
@@ -1271,12 +1270,10 @@ impl SecondOrderSystem for Chain {
         }
         let tol = self.position_tolerance;
         let mut moved = 0;
-        for &s in &self.nonsmooth {
-            let s = s as usize;
-            let x = self.joints[s].taut_measure(q[s], v[s]);
-            let b = &mut self.branch[s];
-            if (*b != 0 && x < -tol) || (*b == 0 && x > tol) {
-                *b ^= 1;
+        for i in 0..self.nonsmooth.len() {
+            let s = self.nonsmooth[i] as usize;
+            if self.disagreement(s, q, v) > tol {
+                self.branch[s] ^= 1;
                 moved += 1;
             }
         }
@@ -1286,15 +1283,7 @@ impl SecondOrderSystem for Chain {
         if !self.frozen {
             return 0.0;
         }
-        let mut worst: f64 = 0.0;
-        for &s in &self.nonsmooth {
-            let s = s as usize;
-            let x = self.joints[s].taut_measure(q[s], v[s]);
-            if (self.branch[s] != 0) != (x > 0.0) {
-                worst = worst.max(x.abs());
-            }
-        }
-        worst
+        self.nonsmooth.iter().map(|&s| self.disagreement(s as usize, q, v)).fold(0.0, f64::max)
     }
     fn release_branches(&mut self) {
         self.frozen = false;
@@ -1595,6 +1584,18 @@ impl Chain {
             return Err(StaticError::Compressed { joint, force: self.joints[joint].stiffness * x });
         }
         Ok(iterations)
+    }
+
+    /// How far (m or rad, [`SubJoint::taut_measure`]) the non-smooth law of
+    /// sub-joint `s` is on the other side of its kink from its frozen
+    /// branch at `(q, v)`; 0 when they agree.
+    fn disagreement(&self, s: usize, q: &[f64], v: &[f64]) -> f64 {
+        let x = self.joints[s].taut_measure(q[s], v[s]);
+        if (self.branch[s] != 0) == (x > 0.0) {
+            0.0
+        } else {
+            x.abs()
+        }
     }
 
     /// Every tension-only law frozen on its taut branch (the linear law).
