@@ -304,8 +304,9 @@ impl RopeBuilder {
         self
     }
     /// Whether the rope's axial law is tension-only. With `true` each
-    /// element's axial force is `EA/L_e · u + damping` while the element is
-    /// stretched (`u > 0`) and zero once it is not ([`SpringLaw::TensionOnly`]):
+    /// element's axial force is `max(0, EA/L_e · u + c u̇)`, the spring and
+    /// its damper clamped together, so zero once the element is not pulling
+    /// ([`SpringLaw::TensionOnly`]):
     /// a slack rope neither pushes nor damps axially (bending and torsion
     /// stay), so a payload placed closer to the anchor than the rope length
     /// falls until the rope is taut instead of being pushed away.
