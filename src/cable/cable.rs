@@ -2,10 +2,12 @@
 //! the queries users read (node positions, tension, moments, energy).
 
 use super::chain::{LinkLoad, SpringLaw, StaticError};
+use super::force::{AttachedForce, ForceElement};
 use super::rope::{RopeLayout, RopeModel, ELEMENT_DOFS};
 use super::spatial::V6;
 use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
 use glam::{DMat3, DVec3};
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Why a cable step failed.
@@ -302,16 +304,11 @@ impl Cable {
         self.model.chain.kinetic_energy()
     }
 
-    /// Elastic energy (joint springs and end springs), J.
+    /// Elastic energy (joint springs, end springs and the potential of the
+    /// force elements, [`ForceElement::energy`]), J.
     pub fn elastic_energy(&self) -> f64 {
         let ch = &self.model.chain;
-        let mut e = ch.elastic_energy(&self.state.q);
-        for an in &ch.anchors {
-            let p = ch.link_point(an.link, an.local_point);
-            let (target, _) = (an.target)(self.state.t);
-            e += 0.5 * an.stiffness * p.distance_squared(target);
-        }
-        e
+        ch.elastic_energy(&self.state.q) + ch.force_element_energy(self.state.t)
     }
 
     /// Gravitational potential energy (zero at y = 0 for gravity along −y), J.
@@ -324,7 +321,40 @@ impl Cable {
         self.kinetic_energy() + self.gravity_energy() + self.elastic_energy()
     }
 
-    /// Removes every external load (point and distributed).
+    /// Adds an implicit force element ([`ForceElement`]) at arc length `s`
+    /// (m, along the unstretched rope from its start as its user described
+    /// it, clamped to `[0, length]`) of rope `rope` ([`Cable::rope`]; 0 is
+    /// the first). Unlike a load, it is evaluated at every Newton iteration
+    /// with its stiffness and damping tangents, so a stiff spring or a strong
+    /// damper stays stable at the frame step. It stays until
+    /// [`Cable::clear_force_elements`]. Returns `false` (and adds nothing)
+    /// when there is no such rope.
+    #[must_use]
+    pub fn add_force_element(&mut self, rope: usize, s: f64, element: Arc<dyn ForceElement>) -> bool {
+        let Some((link, local_point)) = self.rope_point(rope, s) else {
+            return false;
+        };
+        self.model.chain.forces.push(AttachedForce { link, local_point, element });
+        true
+    }
+
+    /// Removes every force element added with [`Cable::add_force_element`]
+    /// (the end springs stay).
+    pub fn clear_force_elements(&mut self) {
+        self.model.chain.forces.clear();
+    }
+
+    /// The link and the point in its frame at arc length `s` (m) of rope
+    /// `rope`, from that rope's start in its user's direction.
+    fn rope_point(&self, rope: usize, s: f64) -> Option<(usize, DVec3)> {
+        let view = self.rope(rope)?;
+        let (l, reversed, length) = (*view.layout(), view.reversed(), view.length());
+        let (i, f) = locate(&l, if reversed { length - s } else { s });
+        Some((l.element_link(i), DVec3::new(f * l.element_length, 0.0, 0.0)))
+    }
+
+    /// Removes every external load (point and distributed). Force elements
+    /// stay ([`Cable::clear_force_elements`]).
     pub fn clear_loads(&mut self) {
         self.model.chain.loads.clear();
     }
@@ -352,13 +382,10 @@ impl Cable {
     /// is no such rope.
     #[must_use]
     pub fn add_rope_point_load(&mut self, rope: usize, s: f64, force: DVec3, moment: DVec3) -> bool {
-        let Some(view) = self.rope(rope) else {
+        let Some((link, local_point)) = self.rope_point(rope, s) else {
             return false;
         };
-        let (l, reversed, length) = (*view.layout(), view.reversed(), view.length());
-        let (i, f) = locate(&l, if reversed { length - s } else { s });
-        let link = l.element_link(i);
-        self.model.chain.loads.push(LinkLoad { link, force, local_point: DVec3::new(f * l.element_length, 0.0, 0.0), moment });
+        self.model.chain.loads.push(LinkLoad { link, force, local_point, moment });
         true
     }
 
@@ -543,8 +570,17 @@ impl Cable {
 
     /// Adds a distributed load: `load(element, midpoint, midpoint velocity)`
     /// returns the force per unit length (N/m, world frame) on that element,
-    /// applied at its midpoint over its unstretched length (contact, wind and
-    /// water use this).
+    /// applied at its midpoint over its unstretched length.
+    ///
+    /// The closure is called **once, now**, with the current midpoints and
+    /// velocities; the forces it returns are point loads like
+    /// [`Cable::add_point_load`]'s (fixed direction, their moment-arm change
+    /// implicit) and **stay, and add up, until [`Cable::clear_loads`]**. A
+    /// load that depends on the rope's state (wind drag on the relative
+    /// velocity, a current) must be cleared and added again before each
+    /// step, so that it is explicit over one step; for a load whose state
+    /// dependence is stiff (strong drag, a contact), use an implicit
+    /// [`ForceElement`] ([`Cable::add_force_element`]).
     pub fn add_distributed_load(&mut self, mut load: impl FnMut(usize, DVec3, DVec3) -> DVec3) {
         let l = self.model.layout;
         let mid = DVec3::new(0.5 * l.element_length, 0.0, 0.0);

@@ -19,6 +19,7 @@
 //!
 //! All spatial quantities are in the world frame about [`Chain::origin`].
 
+use super::force::{point_to_spatial, AttachedForce, ForceElement, PointState, PointWrench};
 use super::spatial::{skew, M6, V6};
 use crate::integrate::{SecondOrderSystem, SystemError};
 use glam::{DMat3, DQuat, DVec3};
@@ -253,6 +254,30 @@ pub struct AnchorSpring {
     pub rotation: Option<(DMat3, f64, f64)>,
 }
 
+/// An anchor spring is the first force element: a spring–damper to a moving
+/// world point, and optionally an orientation hold.
+impl ForceElement for AnchorSpring {
+    fn wrench(&self, t: f64, at: &PointState) -> PointWrench {
+        let (target, target_v) = (self.target)(t);
+        let mut w = PointWrench { force: -(at.point - target) * self.stiffness - (at.velocity - target_v) * self.damping, ..Default::default() };
+        w.stiffness.d = DMat3::from_diagonal(DVec3::splat(self.stiffness));
+        w.damping.d = DMat3::from_diagonal(DVec3::splat(self.damping));
+        if let Some((rt, kr, cr)) = self.rotation {
+            let err = rotation_vector(&(at.rotation * rt.transpose()));
+            w.moment = -err * kr - at.angular_velocity * cr;
+            w.stiffness.a = DMat3::from_diagonal(DVec3::splat(kr));
+            w.damping.a = DMat3::from_diagonal(DVec3::splat(cr));
+        }
+        w
+    }
+
+    fn energy(&self, t: f64, at: &PointState) -> f64 {
+        let (target, _) = (self.target)(t);
+        let turn = self.rotation.map_or(0.0, |(rt, kr, _)| 0.5 * kr * rotation_vector(&(at.rotation * rt.transpose())).length_squared());
+        0.5 * self.stiffness * at.point.distance_squared(target) + turn
+    }
+}
+
 /// An objective elastic law for three consecutive revolute sub-joints
 /// (about local z, then y, then x: an element's bending and torsion).
 ///
@@ -430,8 +455,10 @@ pub struct Chain {
     /// Reference point: internal positions are relative to it (keeps the
     /// spatial inertias well scaled far from the world origin), m.
     pub origin: DVec3,
-    /// Anchor springs (implicit).
+    /// Anchor springs (implicit force elements).
     pub anchors: Vec<AnchorSpring>,
+    /// Other implicit force elements (user laws, contact, drag).
+    pub forces: Vec<AttachedForce>,
     /// External loads of fixed direction (explicit in value, their geometric
     /// stiffness implicit).
     pub loads: Vec<LinkLoad>,
@@ -509,6 +536,7 @@ impl Chain {
             gravity,
             origin,
             anchors: Vec::new(),
+            forces: Vec::new(),
             loads: Vec::new(),
             joint_forces: vec![0.0; n],
             rotation_springs: Vec::new(),
@@ -536,8 +564,14 @@ impl Chain {
         }
     }
 
-    /// Assigns link scratch slots to links with mass, loads or anchors
-    /// (called by every residual evaluation; allocation-free once sized).
+    /// The links that carry loads, anchors or force elements, in that order.
+    fn loaded_links(&self) -> impl Iterator<Item = usize> + '_ {
+        self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)).chain(self.forces.iter().map(|f| f.link))
+    }
+
+    /// Assigns link scratch slots to links with mass, loads, anchors or
+    /// force elements (called by every residual evaluation; allocation-free
+    /// once sized).
     fn assign_slots(&mut self) {
         let n = self.joints.len();
         // The layout only changes with the links that carry loads or
@@ -548,9 +582,9 @@ impl Chain {
         let same = key.built
             && key.n == n
             && self.poses.len() == n
-            && key.links.len() == self.loads.len() + self.anchors.len()
+            && key.links.len() == self.loads.len() + self.anchors.len() + self.forces.len()
             && key.springs.len() == self.rotation_springs.len()
-            && key.links.iter().copied().eq(self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)))
+            && key.links.iter().copied().eq(self.loaded_links())
             && key.springs.iter().copied().eq(self.rotation_springs.iter().map(|r| r.first))
             && key.limbs == self.limbs;
         if same {
@@ -558,8 +592,8 @@ impl Chain {
         }
         self.slot_key.built = true;
         self.slot_key.n = n;
-        self.slot_key.links.clear();
-        self.slot_key.links.extend(self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)));
+        let links: Vec<usize> = self.loaded_links().collect();
+        self.slot_key.links = links;
         self.slot_key.springs.clear();
         self.slot_key.springs.extend(self.rotation_springs.iter().map(|r| r.first));
         self.slot_key.limbs.clone_from(&self.limbs);
@@ -599,7 +633,8 @@ impl Chain {
                 u32::MAX
             };
         }
-        for s in self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)) {
+        for k in 0..self.slot_key.links.len() {
+            let s = self.slot_key.links[k];
             if s < n && self.link_slot[s] == u32::MAX {
                 self.link_slot[s] = count;
                 count += 1;
@@ -608,8 +643,8 @@ impl Chain {
         self.links.clear();
         self.links.resize(count as usize, LinkScratch::default());
         self.anchor_blocks.clear();
-        for an in &self.anchors {
-            let ls = &mut self.links[self.link_slot[an.link] as usize];
+        for link in self.anchors.iter().map(|a| a.link).chain(self.forces.iter().map(|f| f.link)) {
+            let ls = &mut self.links[self.link_slot[link] as usize];
             if ls.anchor == u32::MAX {
                 ls.anchor = self.anchor_blocks.len() as u32;
                 self.anchor_blocks.push((M6::ZERO, M6::ZERO));
@@ -854,6 +889,15 @@ impl Chain {
         vel.bot + vel.top.cross(p)
     }
 
+    /// Potential energy of the anchor springs and force elements
+    /// ([`ForceElement::energy`]) at time `t` (s) and the last kinematics
+    /// pass's poses, J.
+    pub fn force_element_energy(&self, t: f64) -> f64 {
+        let at = |link: usize, local: DVec3| point_state(&self.poses[link], self.origin, local).0;
+        let anchors = self.anchors.iter().map(|a| a.energy(t, &at(a.link, a.local_point)));
+        anchors.chain(self.forces.iter().map(|f| f.element.energy(t, &at(f.link, f.local_point)))).sum()
+    }
+
     /// Total load the chain puts on its base at the last residual
     /// evaluation: gravity, inertia, loads and anchor forces of every link,
     /// as a spatial force `[moment about the chain origin; force]`, N·m and
@@ -913,26 +957,12 @@ impl Chain {
             *blocks = (M6::ZERO, M6::ZERO);
         }
         for an in &self.anchors {
-            let ps = &self.poses[an.link];
-            let ls = &mut self.links[self.link_slot[an.link] as usize];
-            let p = ps.pos + ps.rot * an.local_point;
-            let pv = ps.vel.bot + ps.vel.top.cross(p);
-            let (target, target_v) = (an.target)(t);
-            let force = -(p - (target - self.origin)) * an.stiffness - (pv - target_v) * an.damping;
-            let mut moment = DVec3::ZERO;
-            let px = skew(p);
-            let k_point = M6 { a: px * px.transpose(), b: px, c: px.transpose(), d: DMat3::IDENTITY };
-            let (k_anchor, c_anchor) = &mut self.anchor_blocks[ls.anchor as usize];
-            k_anchor.add_scaled(&k_point, an.stiffness);
-            c_anchor.add_scaled(&k_point, an.damping);
-            if let Some((rt, kr, cr)) = an.rotation {
-                let err = rotation_vector(&(ps.rot * rt.transpose()));
-                moment = -err * kr - ps.vel.top * cr;
-                k_anchor.a += DMat3::from_diagonal(DVec3::splat(kr));
-                c_anchor.a += DMat3::from_diagonal(DVec3::splat(cr));
-            }
-            ls.f += V6::new(p.cross(force) + moment, force);
-            ls.add_point_load_tangent(force, p);
+            let slot = self.link_slot[an.link] as usize;
+            apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[an.link], self.origin, an.local_point, t, an);
+        }
+        for fe in &self.forces {
+            let slot = self.link_slot[fe.link] as usize;
+            apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[fe.link], self.origin, fe.local_point, t, fe.element.as_ref());
         }
         // Tip-to-base sweep: composite loads, residual, geometric stiffness.
         // The load tangent H = [[ha, hb], [0, 0]] is summed tip to base; its
@@ -1291,7 +1321,7 @@ impl SecondOrderSystem for Chain {
     fn nonlinear_update(&mut self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) -> bool {
         // Only a chain closed by anchor springs needs it (an open chain's
         // tip is free, and the plain sum costs nothing).
-        if self.anchors.is_empty() {
+        if self.anchors.is_empty() && self.forces.is_empty() {
             return false;
         }
         self.link_update(q, dx, scale, out);
@@ -1464,6 +1494,29 @@ pub(crate) const BLOCK_INNER: u32 = u32::MAX - 1;
 /// The rotation vector `θ = log(R)`, accurate to round-off for small angles
 /// (`2 atan2(|v|, w)` on the quaternion, not `2 acos(w)`, which loses half
 /// the digits near zero).
+/// The world state of `local_point` on the link at `ps`, and the point
+/// relative to `origin`.
+fn point_state(ps: &Pose, origin: DVec3, local_point: DVec3) -> (PointState, DVec3) {
+    let p = ps.pos + ps.rot * local_point;
+    (PointState { rotation: ps.rot, point: p + origin, velocity: ps.vel.bot + ps.vel.top.cross(p), angular_velocity: ps.vel.top }, p)
+}
+
+/// Evaluates a force element at `local_point` of the link at `ps` and adds
+/// its wrench to the link's load, the moment-arm tangent to the link's load
+/// tangent, and its stiffness and damping (moved to the spatial frame) to
+/// the link's implicit blocks.
+#[allow(clippy::too_many_arguments)]
+fn apply_force_element(ls: &mut LinkScratch, blocks: &mut [(M6, M6)], ps: &Pose, origin: DVec3, local_point: DVec3, t: f64, element: &dyn ForceElement) {
+    let (at, p) = point_state(ps, origin, local_point);
+    let w = element.wrench(t, &at);
+    let px = skew(p);
+    let (k, c) = &mut blocks[ls.anchor as usize];
+    k.add_scaled(&point_to_spatial(&w.stiffness, px), 1.0);
+    c.add_scaled(&point_to_spatial(&w.damping, px), 1.0);
+    ls.f += V6::new(p.cross(w.force) + w.moment, w.force);
+    ls.add_point_load_tangent(w.force, p);
+}
+
 pub(crate) fn rotation_vector(r: &DMat3) -> DVec3 {
     // 2 sin φ · axis = vee(R − Rᵀ); 2 cos φ = tr R − 1.
     let w = 0.5 * DVec3::new(r.y_axis.z - r.z_axis.y, r.z_axis.x - r.x_axis.z, r.x_axis.y - r.y_axis.x);

@@ -3,6 +3,8 @@
 pub mod material;
 pub use self::material::{preset, RopeSection, PRESET_NAMES};
 pub mod chain;
+pub mod force;
+pub use self::force::{AttachedForce, ForceElement, PointSpring, PointState, PointWrench};
 pub mod spatial;
 pub use self::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, Limb, LinkLoad, LinkMass, RotationSpring, SpringLaw, StaticError, SubJoint};
 pub mod rope;

@@ -371,3 +371,67 @@ fn a_limb_from_the_previous_link_is_the_serial_chain() {
     assert_eq!(tree.3, serial.3, "link-by-link update");
     assert_eq!(tree.4, serial.4, "base load");
 }
+
+/// A force element with exact, symmetric tangents: an anisotropic spring
+/// `f = −D (p − p₀)` (D symmetric), and damping linear in the point's
+/// `(ω, v)` through a symmetric 6×6 matrix (all four blocks non-zero).
+struct AnisotropicElement {
+    p0: DVec3,
+    d: DMat3,
+    damping: spatial::M6,
+}
+
+impl ForceElement for AnisotropicElement {
+    fn wrench(&self, _t: f64, at: &PointState) -> PointWrench {
+        let c = &self.damping;
+        let force = -self.d * (at.point - self.p0) - c.c * at.angular_velocity - c.d * at.velocity;
+        let moment = -c.a * at.angular_velocity - c.b * at.velocity;
+        PointWrench { force, moment, stiffness: spatial::M6 { d: self.d, ..spatial::M6::ZERO }, damping: self.damping }
+    }
+}
+
+fn anisotropic_element(rng: &mut Lcg) -> AnisotropicElement {
+    let mut mat = |s: f64| DMat3::from_cols_array(&std::array::from_fn(|_| s * rng.next()));
+    let sym = |m: DMat3| (m + m.transpose()) * 0.5;
+    let d = sym(mat(300.0)) + DMat3::from_diagonal(DVec3::splat(600.0));
+    let (a, b, dd) = (sym(mat(2.0)) + DMat3::from_diagonal(DVec3::splat(4.0)), mat(3.0), sym(mat(5.0)) + DMat3::from_diagonal(DVec3::splat(10.0)));
+    AnisotropicElement { p0: DVec3::new(0.3, -0.5, 0.1), d, damping: spatial::M6 { a, b, c: b.transpose(), d: dd } }
+}
+
+/// A user force element (issue 10, item 7) enters the implicit solve with
+/// its exact tangents: the stiffness check of `check_tangent`, and the
+/// damping `(M + c_v C) x = b` with `C x` from central differences of the
+/// residual in v at v = 0 (where the quadratic velocity terms cancel), on
+/// two links inside the rope.
+#[test]
+fn force_element_tangents_match_finite_differences() {
+    let mut rng = Lcg(41);
+    let mut m = loaded_rope(payload(), true);
+    for link in [m.layout.element_link(1), m.layout.element_link(4)] {
+        m.chain.forces.push(AttachedForce { link, local_point: DVec3::new(0.07, 0.03, -0.02), element: Arc::new(anisotropic_element(&mut rng)) });
+    }
+    for (seed, c_q) in [(11, 1.0), (12, 1e-3)] {
+        let err = check_tangent(&mut m, seed, c_q);
+        assert!(err < 1e-7, "force element: stiffness tangent residual {err:e} at c_q = {c_q}");
+    }
+    let n = m.chain.len();
+    let q: Vec<f64> = m.q0.iter().map(|x| x + 0.05 * rng.next()).collect();
+    let zero = vec![0.0; n];
+    for c_v in [1.0, 1e-2] {
+        let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let (mut x, mut r0, mut rx, mut rp, mut rm) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        m.chain.residual_into(0.0, &q, &zero, &zero, &mut r0).unwrap();
+        m.chain.solve_into(c_v, 0.0, &b, &mut x).unwrap();
+        m.chain.residual_into(0.0, &q, &zero, &x, &mut rx).unwrap();
+        // The residual is quadratic in v: central differences are exact up
+        // to round-off, which a large step keeps small.
+        let eps = 1e-2 / x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let vp: Vec<f64> = x.iter().map(|v| eps * v).collect();
+        let vm: Vec<f64> = x.iter().map(|v| -eps * v).collect();
+        m.chain.residual_into(0.0, &q, &vp, &zero, &mut rp).unwrap();
+        m.chain.residual_into(0.0, &q, &vm, &zero, &mut rm).unwrap();
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let err = (0..n).map(|i| ((rx[i] - r0[i]) + c_v * (rp[i] - rm[i]) / (2.0 * eps) - b[i]).abs() / scale).fold(0.0, f64::max);
+        assert!(err < 1e-7, "force element: damping tangent residual {err:e} at c_v = {c_v}");
+    }
+}

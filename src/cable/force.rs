@@ -1,0 +1,134 @@
+//! Implicit force elements: a force and moment at a point of a link, with
+//! their 6×6 stiffness and damping tangents, entering the chain's implicit
+//! solve (issue 10, item 7).
+//!
+//! A [`ForceElement`] sees the world state of one material point of a link
+//! ([`PointState`]) and returns the wrench it applies there
+//! ([`PointWrench`]): the force at the point, a moment, and the tangents
+//! `K = −∂w/∂(δθ, δp)` and `C = −∂w/∂(δω, δv)` in 3×3 blocks over
+//! (rotation, translation) of the point. The chain moves them to its
+//! spatial frame (`Xᵀ K X`, `X` the point's motion from the link's) and
+//! adds `c_q K + c_v C` to the link's articulated inertia, so a stiff
+//! element stays stable at any step, as the rope's own springs do. The
+//! change of the moment arm as the link turns is added by the chain.
+//!
+//! The articulated-body solve needs symmetric link blocks, so it uses the
+//! symmetric part `½(K + Kᵀ)` (and of `C`). The residual always has the
+//! element's exact wrench, so the answer does not change: a conservative
+//! element (a spring from a potential of the point's position) or a linear
+//! damper with a symmetric matrix keeps Newton's quadratic rate
+//! (`tangent_tests::force_element_tangents_match_finite_differences`); a
+//! non-symmetric one (a follower force, gyroscopic coupling) converges
+//! linearly.
+//!
+//! The end springs that pin or clamp a rope to the world
+//! ([`AnchorSpring`](super::chain::AnchorSpring)) are one; contact, drag,
+//! added mass and brakes are the next ones. User elements go on a chain
+//! through [`Chain::forces`](super::chain::Chain::forces) or
+//! [`Cable::add_force_element`](super::cable::Cable::add_force_element).
+
+use std::sync::Arc;
+
+use glam::{DMat3, DVec3};
+
+use super::spatial::M6;
+
+/// World state of the point a force element acts on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointState {
+    /// Orientation of the link (link frame to world).
+    pub rotation: DMat3,
+    /// The point, world, m.
+    pub point: DVec3,
+    /// The point's velocity, world, m/s.
+    pub velocity: DVec3,
+    /// The link's angular velocity, world, rad/s.
+    pub angular_velocity: DVec3,
+}
+
+/// What a force element applies at its point, world frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PointWrench {
+    /// Force at the point, N.
+    pub force: DVec3,
+    /// Moment, N·m.
+    pub moment: DVec3,
+    /// Stiffness `−∂(moment, force)/∂(δθ, δp)`, blocks `[[a, b], [c, d]]`
+    /// over (rotation, point displacement): `a` N·m/rad, `b` N·m/m = N,
+    /// `c` N/rad, `d` N/m.
+    pub stiffness: M6,
+    /// Damping `−∂(moment, force)/∂(ω, v)`, the same blocks per unit rate
+    /// (N·m·s/rad, N·s, N·s/rad, N·s/m).
+    pub damping: M6,
+}
+
+/// A force law at a point of a link, evaluated at every Newton iteration
+/// with its tangents (implicit). `Send + Sync` so a chain can be stepped on
+/// another thread.
+pub trait ForceElement: Send + Sync {
+    /// The wrench at time `t` (s) and point state `at`.
+    fn wrench(&self, t: f64, at: &PointState) -> PointWrench;
+
+    /// Potential energy stored in the element, J (0 for a dissipative or
+    /// non-conservative one); counted in [`Cable::energy`](super::cable::Cable::energy).
+    fn energy(&self, _t: f64, _at: &PointState) -> f64 {
+        0.0
+    }
+}
+
+/// A force element on a link of a chain.
+#[derive(Clone)]
+pub struct AttachedForce {
+    /// Sub-joint index whose link carries the element.
+    pub link: usize,
+    /// The point in the link frame, m.
+    pub local_point: DVec3,
+    /// The law.
+    pub element: Arc<dyn ForceElement>,
+}
+
+impl std::fmt::Debug for AttachedForce {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("AttachedForce").field("link", &self.link).field("local_point", &self.local_point).finish_non_exhaustive()
+    }
+}
+
+/// A linear spring–damper from a point to a fixed world point, with an
+/// optional linear drag on the point's velocity: `f = −k (p − target) − c v`
+/// (N). The simplest implicit element: a mooring line's fairlead spring, a
+/// tag line held by a person, viscous drag on a payload.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointSpring {
+    /// Fixed world point the spring pulls toward, m.
+    pub target: DVec3,
+    /// Stiffness, N/m (≥ 0).
+    pub stiffness: f64,
+    /// Damping on the point's absolute velocity, N·s/m (≥ 0).
+    pub damping: f64,
+}
+
+impl ForceElement for PointSpring {
+    fn wrench(&self, _t: f64, at: &PointState) -> PointWrench {
+        let mut w = PointWrench { force: -(at.point - self.target) * self.stiffness - at.velocity * self.damping, ..Default::default() };
+        w.stiffness.d = DMat3::from_diagonal(DVec3::splat(self.stiffness));
+        w.damping.d = DMat3::from_diagonal(DVec3::splat(self.damping));
+        w
+    }
+
+    fn energy(&self, _t: f64, at: &PointState) -> f64 {
+        0.5 * self.stiffness * at.point.distance_squared(self.target)
+    }
+}
+
+/// `Xᵀ K X`: a point tangent `k` (blocks over the rotation and the
+/// displacement of the point at `p`, relative to the spatial origin) as a
+/// spatial tangent about the origin. `X = [[I, 0], [p̃ᵀ, I]]` maps a spatial
+/// displacement `(δθ, δx₀)` to the point's `(δθ, δx₀ + δθ × p)`.
+/// Only the symmetric part of `k` is used (see the module docs).
+pub(crate) fn point_to_spatial(k: &M6, px: DMat3) -> M6 {
+    let b = (k.b + k.c.transpose()) * 0.5;
+    let k = M6 { a: (k.a + k.a.transpose()) * 0.5, b, c: b.transpose(), d: (k.d + k.d.transpose()) * 0.5 };
+    let pxt = px.transpose();
+    let b = k.b + px * k.d;
+    M6 { a: k.a + px * k.c + b * pxt, b, c: k.c + k.d * pxt, d: k.d }
+}
