@@ -25,6 +25,11 @@
 //! and the `cablesim` runner, both thin adapters over the same core.
 #![warn(missing_docs)]
 
+/// The f64 vector types of the rope API (`DVec3`, `DMat3`, `DQuat`), the
+/// glam version this crate is built with, re-exported so an app needs no
+/// glam dependency of its own (as `bevy_rapier3d` re-exports rapier).
+pub use glam;
+
 pub mod cable;
 #[cfg(feature = "rapier")]
 pub mod coupling;
