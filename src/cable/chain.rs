@@ -19,7 +19,7 @@
 //!
 //! All spatial quantities are in the world frame about [`Chain::origin`].
 
-use super::force::{point_to_spatial, AttachedForce, ForceElement, PointState, PointWrench};
+use super::force::{point_to_spatial, spring_to, AttachedForce, ForceElement, PointState, PointWrench};
 use super::spatial::{skew, M6, V6};
 use crate::integrate::{SecondOrderSystem, SystemError};
 use glam::{DMat3, DQuat, DVec3};
@@ -259,9 +259,7 @@ pub struct AnchorSpring {
 impl ForceElement for AnchorSpring {
     fn wrench(&self, t: f64, at: &PointState) -> PointWrench {
         let (target, target_v) = (self.target)(t);
-        let mut w = PointWrench { force: -(at.point - target) * self.stiffness - (at.velocity - target_v) * self.damping, ..Default::default() };
-        w.stiffness.d = DMat3::from_diagonal(DVec3::splat(self.stiffness));
-        w.damping.d = DMat3::from_diagonal(DVec3::splat(self.damping));
+        let mut w = spring_to(at, target, target_v, self.stiffness, self.damping);
         if let Some((rt, kr, cr)) = self.rotation {
             let err = rotation_vector(&(at.rotation * rt.transpose()));
             w.moment = -err * kr - at.angular_velocity * cr;
@@ -1630,7 +1628,7 @@ impl Chain {
     pub fn solve_static(&mut self, t: f64, q: &mut [f64], tol: f64, max_iterations: usize) -> Result<usize, StaticError> {
         self.freeze_taut();
         let result = self.solve_static_on_branches(t, q, tol, max_iterations);
-        self.frozen = false;
+        self.release_branches();
         let iterations = result?;
         let compressed = self.nonsmooth.iter().map(|&s| s as usize).map(|s| (s, q[s] - self.joints[s].rest)).min_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((joint, x)) = compressed.filter(|&(_, x)| x < -tol) {
@@ -1715,7 +1713,7 @@ impl Chain {
     pub fn estimate_max_frequency(&mut self, t: f64, q: &[f64], iterations: usize) -> Result<f64, SystemError> {
         self.freeze_taut();
         let result = self.power_iteration(t, q, iterations);
-        self.frozen = false;
+        self.release_branches();
         Ok(result?.max(0.0).sqrt())
     }
 

@@ -109,15 +109,23 @@ pub struct PointSpring {
 
 impl ForceElement for PointSpring {
     fn wrench(&self, _t: f64, at: &PointState) -> PointWrench {
-        let mut w = PointWrench { force: -(at.point - self.target) * self.stiffness - at.velocity * self.damping, ..Default::default() };
-        w.stiffness.d = DMat3::from_diagonal(DVec3::splat(self.stiffness));
-        w.damping.d = DMat3::from_diagonal(DVec3::splat(self.damping));
-        w
+        spring_to(at, self.target, DVec3::ZERO, self.stiffness, self.damping)
     }
 
     fn energy(&self, _t: f64, at: &PointState) -> f64 {
         0.5 * self.stiffness * at.point.distance_squared(self.target)
     }
+}
+
+/// The wrench of an isotropic linear spring–damper (`stiffness` N/m,
+/// `damping` N·s/m) from the point to `target` (m), which moves at
+/// `target_velocity` (m/s): `f = −k (p − target) − c (v − target_velocity)`,
+/// with its tangents `k I` and `c I`.
+pub(crate) fn spring_to(at: &PointState, target: DVec3, target_velocity: DVec3, stiffness: f64, damping: f64) -> PointWrench {
+    let mut w = PointWrench { force: -(at.point - target) * stiffness - (at.velocity - target_velocity) * damping, ..Default::default() };
+    w.stiffness.d = DMat3::from_diagonal(DVec3::splat(stiffness));
+    w.damping.d = DMat3::from_diagonal(DVec3::splat(damping));
+    w
 }
 
 /// `Xᵀ K X`: a point tangent `k` (blocks over the rotation and the
