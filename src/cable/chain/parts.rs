@@ -1,0 +1,308 @@
+//! What a chain is made of: sub-joints, link masses, base motion, anchor
+//! springs, rotation springs, loads and limbs.
+
+use super::rotation_vector;
+use crate::cable::force::{spring_to, ForceElement, PointState, PointWrench};
+use glam::{DMat3, DVec3};
+use std::sync::Arc;
+
+/// Revolute or prismatic one-DOF joint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointKind {
+    /// Rotation about the axis, rad.
+    Revolute,
+    /// Translation along the axis, m.
+    Prismatic,
+}
+
+/// Mass properties of a link, in the link's own frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinkMass {
+    /// Mass, kg.
+    pub mass: f64,
+    /// Centre of mass in the link frame, m.
+    pub com: DVec3,
+    /// Rotational inertia about the centre of mass, in the link frame, kg·m².
+    pub inertia: DMat3,
+    /// Linear velocity damping, 1/s: a force `−c m v` at the centre of mass
+    /// (rapier's `Damping::linear_damping`; air drag in its simplest form).
+    /// Implicit (its tangent enters the solve).
+    pub linear_damping: f64,
+    /// Angular velocity damping, 1/s: a moment `−c I ω` (rapier's
+    /// `Damping::angular_damping`). Implicit.
+    pub angular_damping: f64,
+}
+
+impl LinkMass {
+    /// Mass properties without damping.
+    pub fn new(mass: f64, com: DVec3, inertia: DMat3) -> Self {
+        LinkMass { mass, com, inertia, linear_damping: 0.0, angular_damping: 0.0 }
+    }
+
+    /// Combines two sets of mass properties given in the same frame (the
+    /// damping rates are mass-weighted).
+    pub fn combine(&self, o: &LinkMass) -> LinkMass {
+        let m = self.mass + o.mass;
+        let com = (self.com * self.mass + o.com * o.mass) / m;
+        let shift = |lm: &LinkMass| {
+            let d = lm.com - com;
+            lm.inertia + (DMat3::from_diagonal(DVec3::splat(d.length_squared())) - crate::cable::spatial::outer3(d, d)) * lm.mass
+        };
+        LinkMass {
+            mass: m,
+            com,
+            inertia: shift(self) + shift(o),
+            linear_damping: (self.linear_damping * self.mass + o.linear_damping * o.mass) / m,
+            angular_damping: (self.angular_damping * self.mass + o.angular_damping * o.mass) / m,
+        }
+    }
+}
+
+/// One sub-joint and the link that follows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SubJoint {
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// Unit axis in the joint frame.
+    pub axis: DVec3,
+    /// Joint point in the parent link frame, m.
+    pub offset: DVec3,
+    /// Constant rotation from the parent link frame to the joint frame.
+    pub pre_rotation: DMat3,
+    /// Spring stiffness, N/m or N·m/rad.
+    pub stiffness: f64,
+    /// Viscous damping, N·s/m or N·m·s/rad.
+    pub damping: f64,
+    /// Spring rest value, m or rad.
+    pub rest: f64,
+    /// Mass of the link after this joint; `None` for a massless sub-link.
+    pub link: Option<LinkMass>,
+    /// How the spring force depends on the coordinate: linear, or
+    /// tension-only (a wire rope's axial slide: it cannot push). After
+    /// changing it on a built chain, call [`Chain::invalidate_layout`](super::Chain::invalidate_layout).
+    pub law: SpringLaw,
+}
+
+/// The force law of a sub-joint's spring and damper.
+///
+/// `x = q − rest` is the spring's extension (m or rad) and `v` its rate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SpringLaw {
+    /// `f = k x + c v` for every `x` (rods, beams, shear, bending).
+    #[default]
+    Linear,
+    /// `f = max(0, k x + c v)`: a rope never pushes, neither with its
+    /// spring nor with its damper. Without damping this is `k x` while
+    /// stretched (`x > 0`) and zero once slack. With damping the spring and
+    /// damper are clamped together, so the force is continuous and
+    /// nondecreasing in the step's unknown (an element closing faster
+    /// than `x/τ`, `τ = c/k`, goes slack a little before `x = 0`; one
+    /// opening fast pulls a little before it), which keeps Newton's
+    /// problem well posed: clamping the spring alone would make the force
+    /// jump by `c v` at `x = 0`. The kink is not smoothed (the force is
+    /// exact); Newton freezes each law on one branch per solve
+    /// (`SecondOrderSystem::freeze_branches`).
+    TensionOnly,
+}
+
+impl SubJoint {
+    /// The spring + damper force at extension `q − rest` and rate `v`, and
+    /// its tangents `(f, ∂f/∂q, ∂f/∂v)` (N or N·m; N/m or N·m/rad; N·s/m or
+    /// N·m·s/rad).
+    #[inline]
+    pub fn spring_force(&self, q: f64, v: f64) -> (f64, f64, f64) {
+        self.spring_force_on_branch(q, v, self.is_taut(q, v))
+    }
+
+    /// [`SubJoint::spring_force`] with the law held on one branch: `taut`
+    /// gives the linear law whatever the sign of the extension, slack gives
+    /// zero (what Newton solves while the branches are frozen).
+    #[inline]
+    pub fn spring_force_on_branch(&self, q: f64, v: f64, taut: bool) -> (f64, f64, f64) {
+        match self.law {
+            SpringLaw::TensionOnly if !taut => (0.0, 0.0, 0.0),
+            _ => (self.stiffness * (q - self.rest) + self.damping * v, self.stiffness, self.damping),
+        }
+    }
+
+    /// Whether the law is on its taut branch at `(q, v)` (always for a
+    /// linear law; a tension-only spring pulls when `k x + c v > 0`).
+    pub fn is_taut(&self, q: f64, v: f64) -> bool {
+        self.law == SpringLaw::Linear || self.taut_measure(q, v) > 0.0
+    }
+
+    /// `(k x + c v)/k` (m or rad): the extension the spring and damper pull
+    /// with together; its sign decides a tension-only law's branch.
+    #[inline]
+    pub(crate) fn taut_measure(&self, q: f64, v: f64) -> f64 {
+        let x = q - self.rest;
+        if self.stiffness > 0.0 {
+            x + self.damping / self.stiffness * v
+        } else {
+            x
+        }
+    }
+
+    /// The joint frame (orientation, origin) in the frame of the parent
+    /// link at `(prev_rot, prev_pos)`: the constant pre-rotation and
+    /// offset applied, before the joint's own motion.
+    #[inline]
+    pub(crate) fn frame(&self, prev_rot: DMat3, prev_pos: DVec3) -> (DMat3, DVec3) {
+        let rj = if self.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * self.pre_rotation };
+        let pj = if self.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * self.offset };
+        (rj, pj)
+    }
+
+    /// Elastic energy stored at coordinate `q`, J.
+    pub fn spring_energy(&self, q: f64) -> f64 {
+        let x = q - self.rest;
+        match self.law {
+            SpringLaw::TensionOnly if x <= 0.0 => 0.0,
+            _ => 0.5 * self.stiffness * x * x,
+        }
+    }
+}
+
+/// Pose, velocity and acceleration of the chain's base frame at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BaseState {
+    /// Orientation of the base frame.
+    pub rotation: DMat3,
+    /// Position of the base frame origin (world), m.
+    pub position: DVec3,
+    /// Angular velocity, rad/s.
+    pub angular_velocity: DVec3,
+    /// Velocity of the base origin, m/s.
+    pub velocity: DVec3,
+    /// Angular acceleration, rad/s².
+    pub angular_acceleration: DVec3,
+    /// Acceleration of the base origin, m/s².
+    pub acceleration: DVec3,
+}
+
+impl BaseState {
+    /// A base at rest with the given pose.
+    pub fn fixed(rotation: DMat3, position: DVec3) -> Self {
+        BaseState { rotation, position, angular_velocity: DVec3::ZERO, velocity: DVec3::ZERO, angular_acceleration: DVec3::ZERO, acceleration: DVec3::ZERO }
+    }
+}
+
+/// How the base frame moves: fixed, or a prescribed function of time.
+#[derive(Clone)]
+pub enum BaseMotion {
+    /// At rest.
+    Fixed(BaseState),
+    /// Prescribed motion `t ↦ state` (kinematic body, moving crane hook…).
+    Prescribed(Arc<dyn Fn(f64) -> BaseState + Send + Sync>),
+}
+
+impl BaseMotion {
+    /// The base state at time `t`, s.
+    pub fn at(&self, t: f64) -> BaseState {
+        match self {
+            BaseMotion::Fixed(s) => *s,
+            BaseMotion::Prescribed(f) => f(t),
+        }
+    }
+}
+
+impl std::fmt::Debug for BaseMotion {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BaseMotion::Fixed(s) => f.debug_tuple("Fixed").field(s).finish(),
+            BaseMotion::Prescribed(_) => f.write_str("Prescribed(..)"),
+        }
+    }
+}
+
+/// A spring–damper holding a point of a link to a (possibly moving) world
+/// point, optionally also holding the link's orientation. Implicit: its
+/// stiffness enters the articulated-body solve.
+#[derive(Clone)]
+pub struct AnchorSpring {
+    /// Sub-joint index whose link is held.
+    pub link: usize,
+    /// Held point in the link frame, m.
+    pub local_point: DVec3,
+    /// Target world point (and its velocity) as a function of time.
+    pub target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>,
+    /// Translational stiffness, N/m.
+    pub stiffness: f64,
+    /// Translational damping, N·s/m.
+    pub damping: f64,
+    /// Optional orientation hold: target orientation, stiffness N·m/rad,
+    /// damping N·m·s/rad.
+    pub rotation: Option<(DMat3, f64, f64)>,
+}
+
+/// An anchor spring is the first force element: a spring–damper to a moving
+/// world point, and optionally an orientation hold.
+impl ForceElement for AnchorSpring {
+    fn wrench(&self, t: f64, at: &PointState) -> PointWrench {
+        let (target, target_v) = (self.target)(t);
+        let mut w = spring_to(at, target, target_v, self.stiffness, self.damping);
+        if let Some((rt, kr, cr)) = self.rotation {
+            let err = rotation_vector(&(at.rotation * rt.transpose()));
+            w.moment = -err * kr - at.angular_velocity * cr;
+            w.stiffness.a = DMat3::from_diagonal(DVec3::splat(kr));
+            w.damping.a = DMat3::from_diagonal(DVec3::splat(cr));
+        }
+        w
+    }
+
+    fn energy(&self, t: f64, at: &PointState) -> f64 {
+        let (target, _) = (self.target)(t);
+        let turn = self.rotation.map_or(0.0, |(rt, kr, _)| 0.5 * kr * rotation_vector(&(at.rotation * rt.transpose())).length_squared());
+        0.5 * self.stiffness * at.point.distance_squared(target) + turn
+    }
+}
+
+/// An objective elastic law for three consecutive revolute sub-joints
+/// (about local z, then y, then x: an element's bending and torsion).
+///
+/// The Euler angles `(a, b, c)` give the relative rotation
+/// `R = Rz(a) Ry(b) Rx(c)`; the rest angles (the sub-joints' `rest`) give
+/// `R₀`. The energy is `½ θᵀ K θ` with `θ = log(R₀ᵀ R)` the rotation vector
+/// of the deviation and `K = diag(k_x, k_y, k_z)` (torsion, bending about y,
+/// bending about z), so bending and torsion moments act about the right
+/// axes for any combination of the three angles (with one spring per Euler
+/// angle they would not, and 3D bending–torsion would converge only as
+/// O(1/N)). Generalized forces: `Q_k = −(Kθ)ᵀ J_l⁻¹(θ) R₀ᵀ E_k`, `E_k` the
+/// sub-joint axes in the joint frame. The sub-joints' own `stiffness` and
+/// `damping` are then only the diagonal of the implicit tangent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RotationSpring {
+    /// Index of the first (z) sub-joint of the three.
+    pub first: usize,
+    /// Stiffness about local x (torsion), y and z (bending), N·m/rad.
+    pub k: DVec3,
+    /// Stiffness-proportional damping time constant, s.
+    pub tau: f64,
+}
+
+/// An external load on a link: a force of fixed direction at a point plus a
+/// moment, world frame.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LinkLoad {
+    /// Sub-joint index whose link carries the load.
+    pub link: usize,
+    /// Force, N.
+    pub force: DVec3,
+    /// Application point in the link frame, m.
+    pub local_point: DVec3,
+    /// Moment, N·m.
+    pub moment: DVec3,
+}
+
+/// A limb of a tree-shaped chain: the sub-joints from `first` up to the
+/// next limb's first (or the chain's end) form a serial branch whose first
+/// sub-joint hangs from link `parent` (`None`: from the base) instead of
+/// from link `first − 1`. A chain without limbs is serial. The sub-joints
+/// are in depth-first order: `parent < first`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limb {
+    /// First sub-joint of the limb.
+    pub first: usize,
+    /// Link the limb hangs from (`None`: the base).
+    pub parent: Option<usize>,
+}

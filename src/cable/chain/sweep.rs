@@ -1,0 +1,692 @@
+//! The O(n) passes: kinematics, the tip-to-base residual sweep with the
+//! articulated-body elimination, and the forward substitution.
+
+use super::*;
+use crate::cable::force::{point_to_spatial, ForceElement, PointState};
+use crate::cable::spatial::{skew, M6, V6};
+use crate::integrate::SystemError;
+use glam::{DMat3, DQuat, DVec3};
+
+/// Carry of the tip-to-base sweep that a limb hands to its parent link:
+/// composite load, load tangent blocks and the articulated-body carry.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LimbCarry {
+    fc: V6,
+    ha: DMat3,
+    hb: DMat3,
+    inertia: M6,
+    bias: V6,
+}
+
+impl Default for LimbCarry {
+    /// Zero (glam's `DMat3::default()` is the identity).
+    fn default() -> Self {
+        LimbCarry { fc: V6::ZERO, ha: DMat3::ZERO, hb: DMat3::ZERO, inertia: M6::ZERO, bias: V6::ZERO }
+    }
+}
+
+impl LimbCarry {
+    fn add(&mut self, o: &LimbCarry) {
+        self.fc += o.fc;
+        self.ha += o.ha;
+        self.hb += o.hb;
+        self.inertia += o.inertia;
+        self.bias += o.bias;
+    }
+}
+
+/// Pose of a sub-joint's link, rebuilt by every kinematics pass.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Pose {
+    /// Link orientation.
+    pub rot: DMat3,
+    /// Link origin (relative to the chain origin).
+    pub pos: DVec3,
+    /// Link spatial velocity.
+    pub vel: V6,
+}
+
+/// What the tip-to-base sweep and the solve need per sub-joint (written by
+/// the kinematics pass, so the sweep and the solve stream this array alone).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Row {
+    /// Motion subspace.
+    pub s: V6,
+    /// `G_s S_s`: the geometric-stiffness term the solve needs (see
+    /// [`Chain::solve_into`]).
+    pub gs: V6,
+    /// ABA scratch: `U = I^A S`, `1/D`, `u`.
+    pub u_vec: V6,
+    pub d: f64,
+    pub u: f64,
+    /// Elastic + damping generalized force, N or N·m.
+    pub elastic: f64,
+    /// The sub-joint's stiffness and damping (its armature in the solve).
+    pub stiffness: f64,
+    pub damping: f64,
+}
+
+/// Scratch of a link with mass or with loads (one per element, and the
+/// bodies). The spatial inertia `[[ia, ib], [ibᵀ, m 1]]` and the load
+/// tangent `[[ha, hb], [0, 0]]` are kept as their non-trivial blocks.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LinkScratch {
+    pub ia: DMat3,
+    pub ib: DMat3,
+    pub m: f64,
+    /// Loads on this link alone (spatial force).
+    pub f: V6,
+    /// Load tangent `Σ B̃` of this link's loads (upper blocks).
+    pub ha: DMat3,
+    pub hb: DMat3,
+    /// Index into [`Chain::anchor_blocks`], or `u32::MAX`.
+    pub anchor: u32,
+    /// Linear and angular velocity damping rates of the link's mass, 1/s.
+    pub damping: (f64, f64),
+}
+
+impl Default for LinkScratch {
+    fn default() -> Self {
+        LinkScratch { ia: DMat3::ZERO, ib: DMat3::ZERO, m: 0.0, f: V6::ZERO, ha: DMat3::ZERO, hb: DMat3::ZERO, anchor: u32::MAX, damping: (0.0, 0.0) }
+    }
+}
+
+impl LinkScratch {
+    fn clear(&mut self) {
+        let anchor = self.anchor;
+        *self = LinkScratch { anchor, ..Default::default() };
+    }
+    /// Adds the load tangent `B̃` of a force of fixed direction at `p`.
+    #[inline]
+    fn add_point_load_tangent(&mut self, force: DVec3, p: DVec3) {
+        let t = M6::point_load_tangent(force, p);
+        self.ha += t.a;
+        self.hb += t.b;
+    }
+}
+
+impl Chain {
+    /// One base-to-tip pass: forward kinematics, velocities and
+    /// accelerations; the d'Alembert and gravity loads of every link with
+    /// mass; every sub-joint's elastic force (rotation springs at their
+    /// last sub-joint). Loads of other links are cleared.
+    pub(crate) fn kinematics(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64]) {
+        self.assign_slots();
+        let base = self.base.at(t);
+        let bp = base.position - self.origin;
+        let bw = base.angular_velocity;
+        // Spatial velocity/acceleration of the base, at the reference point.
+        let mut prev_vel = V6::new(bw, base.velocity - bw.cross(bp));
+        let mut prev_acc = V6::new(base.angular_acceleration, base.acceleration - base.angular_acceleration.cross(bp) - bw.cross(base.velocity));
+        let mut prev_rot = base.rotation;
+        let mut prev_pos = bp;
+        self.base_pose = (prev_rot, prev_pos);
+        let (base_vel, base_acc) = (prev_vel, prev_acc);
+        let tree = !self.limbs.is_empty();
+        let mut next_limb = 0;
+        let mut next_spring = 0;
+        for (s, j) in self.joints.iter().enumerate() {
+            if tree && self.limb_start[s] {
+                // A limb starts here: its parent is not link s − 1.
+                let limb = self.limbs[next_limb];
+                next_limb += 1;
+                match limb.parent {
+                    None => (prev_vel, prev_acc, prev_rot, prev_pos) = (base_vel, base_acc, self.base_pose.0, self.base_pose.1),
+                    Some(p) => {
+                        let ps = self.poses[p];
+                        (prev_vel, prev_acc, prev_rot, prev_pos) = (ps.vel, self.limb_acc[self.limb_parent[p] as usize], ps.rot, ps.pos);
+                    }
+                }
+            }
+            let (rj, pj) = j.frame(prev_rot, prev_pos);
+            // Principal axes (every rope sub-joint) are column picks.
+            let axis_id = axis_id(j.axis);
+            let aw = match axis_id {
+                0 => rj.x_axis,
+                1 => rj.y_axis,
+                2 => rj.z_axis,
+                _ => rj * j.axis,
+            };
+            let (sv, rot, pos) = match j.kind {
+                JointKind::Revolute => (V6::new(aw, pj.cross(aw)), rotate_about_id(rj, axis_id, j.axis, q[s]), pj),
+                JointKind::Prismatic => (V6::new(DVec3::ZERO, aw), rj, pj + aw * q[s]),
+            };
+            let vel = prev_vel + sv * v[s];
+            let acc = prev_acc + prev_vel.cross_motion(sv) * v[s] + sv * a[s];
+            self.poses[s] = Pose { rot, pos, vel };
+            let row = &mut self.rows[s];
+            row.s = sv;
+            let (elastic, stiffness, damping) =
+                if self.frozen && j.law != SpringLaw::Linear { j.spring_force_on_branch(q[s], v[s], self.branch[s] != 0) } else { j.spring_force(q[s], v[s]) };
+            row.stiffness = stiffness;
+            row.damping = damping;
+            row.elastic = elastic;
+            let slot = self.link_slot[s];
+            if slot != u32::MAX {
+                let ls = &mut self.links[slot as usize];
+                ls.clear();
+                if let Some(lm) = &j.link {
+                    // d'Alembert + gravity at the centre of mass.
+                    let c = pos + rot * lm.com;
+                    let ic = rot * lm.inertia * rot.transpose();
+                    let w = vel.top;
+                    let vc = vel.bot + w.cross(c);
+                    let alpha = acc.top;
+                    let ac = acc.bot + alpha.cross(c) + w.cross(vc);
+                    let mut force = (self.gravity - ac) * lm.mass;
+                    let mut moment = -(ic * alpha + w.cross(ic * w));
+                    if lm.linear_damping != 0.0 || lm.angular_damping != 0.0 {
+                        force -= vc * (lm.linear_damping * lm.mass);
+                        moment -= ic * w * lm.angular_damping;
+                        ls.damping = (lm.linear_damping, lm.angular_damping);
+                    }
+                    ls.f = V6::new(c.cross(force) + moment, force);
+                    ls.add_point_load_tangent(force, c);
+                    let cx = skew(c);
+                    ls.ia = ic + cx * cx.transpose() * lm.mass;
+                    ls.ib = cx * lm.mass;
+                    ls.m = lm.mass;
+                }
+            }
+            // A rotation spring whose three sub-joints are now known.
+            while let Some(&k) = self.spring_order.get(next_spring) {
+                let rs = self.rotation_springs[k as usize];
+                if rs.first + 2 > s {
+                    break;
+                }
+                next_spring += 1;
+                let (forces, a_mat) = rotation_spring_forces(&rs, &self.joints, q, v);
+                for (i, fi) in forces.iter().enumerate() {
+                    self.rows[rs.first + i].elastic = *fi;
+                }
+                self.rot_scratch[k as usize].0 = a_mat;
+            }
+            if tree && self.limb_parent[s] != u32::MAX {
+                self.limb_acc[self.limb_parent[s] as usize] = acc;
+            }
+            prev_vel = vel;
+            prev_acc = acc;
+            prev_rot = rot;
+            prev_pos = pos;
+        }
+    }
+
+    /// Residual `r = M(q) a − Q(t, q, v)` (see [`SecondOrderSystem`](crate::integrate::SecondOrderSystem)); also
+    /// prepares everything [`Chain::solve_into`] needs at this state.
+    pub fn residual_into(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64]) -> Result<(), SystemError> {
+        self.sweep(t, q, v, a, r, None)
+    }
+
+    /// Residual and Newton correction in one tip-to-base sweep: `rhs = −r`
+    /// and `(M + c_v C + c_q (K + K_g)) x = rhs` (see
+    /// [`SecondOrderSystem::residual_and_correction`](crate::integrate::SecondOrderSystem::residual_and_correction)).
+    #[allow(clippy::too_many_arguments)]
+    pub fn residual_and_correction_into(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        c_v: f64,
+        c_q: f64,
+        rhs: &mut [f64],
+        x: &mut [f64],
+    ) -> Result<(), SystemError> {
+        self.sweep(t, q, v, a, rhs, Some((c_v, c_q)))?;
+        self.forward_solve(x);
+        Ok(())
+    }
+
+    /// Forward kinematics, loads, and the tip-to-base sweep. Without
+    /// `solve`, writes the residual into `r`; with `solve = (c_v, c_q)`,
+    /// writes `−r` into `r` and runs the articulated-body backward sweep
+    /// for that right-hand side on the way (finish with `forward_solve`).
+    fn sweep(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64], solve: Option<(f64, f64)>) -> Result<(), SystemError> {
+        // One cheap pass: a NaN or infinity anywhere makes the sum non-finite
+        // (then find which coordinate, for the message).
+        if !(q.iter().sum::<f64>() + v.iter().sum::<f64>() + a.iter().sum::<f64>()).is_finite() {
+            if let Some(index) = q.iter().chain(v).chain(a).position(|x| !x.is_finite()) {
+                return Err(SystemError::NonFinite { index: index % q.len().max(1) });
+            }
+        }
+        self.kinematics(t, q, v, a);
+        let n = self.joints.len();
+        for ld in &self.loads {
+            let ps = &self.poses[ld.link];
+            let ls = &mut self.links[self.link_slot[ld.link] as usize];
+            let p = ps.pos + ps.rot * ld.local_point;
+            ls.f += V6::new(p.cross(ld.force) + ld.moment, ld.force);
+            ls.add_point_load_tangent(ld.force, p);
+        }
+        for blocks in self.anchor_blocks.iter_mut() {
+            *blocks = (M6::ZERO, M6::ZERO);
+        }
+        for an in &self.anchors {
+            let slot = self.link_slot[an.link] as usize;
+            apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[an.link], self.origin, an.local_point, t, an);
+        }
+        for fe in &self.forces {
+            let slot = self.link_slot[fe.link] as usize;
+            apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[fe.link], self.origin, fe.local_point, t, fe.element.as_ref());
+        }
+        // Tip-to-base sweep: composite loads, residual, geometric stiffness.
+        // The load tangent H = [[ha, hb], [0, 0]] is summed tip to base; its
+        // symmetric part ½(H + Hᵀ) = [[hs, ½hb], [½hbᵀ, 0]].
+        let mut fc = V6::ZERO;
+        let (mut ha, mut hb) = (DMat3::ZERO, DMat3::ZERO);
+        let (mut hs, mut hb2) = (DMat3::ZERO, DMat3::ZERO);
+        let mut aba = AbaCarry::default();
+        let tree = !self.limbs.is_empty();
+        let mut base_extra = V6::ZERO;
+        if tree {
+            self.limb_carry.iter_mut().for_each(|c| *c = LimbCarry::default());
+        }
+        let mut next_limb = self.limbs.len();
+        for s in (0..n).rev() {
+            let slot = self.link_slot[s];
+            if tree && self.limb_parent[s] != u32::MAX {
+                // The limbs hanging from this link.
+                let c = self.limb_carry[self.limb_parent[s] as usize];
+                fc += c.fc;
+                ha += c.ha;
+                hb += c.hb;
+                hs = (ha + ha.transpose()) * 0.5;
+                hb2 = hb * 0.5;
+                if solve.is_some() {
+                    aba.inertia += c.inertia;
+                    aba.bias += c.bias;
+                }
+            }
+            if slot != u32::MAX {
+                let ls = &self.links[slot as usize];
+                fc += ls.f;
+                ha += ls.ha;
+                hb += ls.hb;
+                hs = (ha + ha.transpose()) * 0.5;
+                hb2 = hb * 0.5;
+            }
+            let row = &mut self.rows[s];
+            let res = -row.s.dot(fc) + row.elastic - self.joint_forces[s];
+            // G_s = ½(H + Hᵀ) + ½(a zᵀ + z aᵀ), a = F̄(f^c) S = S ×* f^c,
+            // zᵀS = 1, aᵀS = 0, so G_s S_s = ½(H + Hᵀ) S + ½ S ×* f^c.
+            let sv = row.s;
+            let sym = if sv.top == DVec3::ZERO { V6::new(hb2 * sv.bot, DVec3::ZERO) } else { V6::new(hs * sv.top + hb2 * sv.bot, hb2.transpose() * sv.top) };
+            row.gs = sym + sv.cross_force(fc) * 0.5;
+            match solve {
+                None => r[s] = res,
+                Some((c_v, c_q)) => {
+                    r[s] = -res;
+                    self.eliminate(&mut aba, s, c_v, c_q, r)?;
+                }
+            }
+            if tree && self.limb_start[s] {
+                // The limb is done: hand its carry to its parent link.
+                next_limb -= 1;
+                let carry = LimbCarry { fc, ha, hb, inertia: aba.inertia, bias: aba.bias };
+                match self.limbs[next_limb].parent {
+                    None => base_extra += fc,
+                    Some(p) => self.limb_carry[self.limb_parent[p] as usize].add(&carry),
+                }
+                (fc, ha, hb, hs, hb2) = (V6::ZERO, DMat3::ZERO, DMat3::ZERO, DMat3::ZERO, DMat3::ZERO);
+                aba = AbaCarry::default();
+            }
+        }
+        self.base_load = fc + base_extra;
+        Ok(())
+    }
+
+    /// Solves `(M + c_v C + c_q (K + K_g)) x = b` at the state of the last
+    /// [`Chain::residual_into`] call, in O(n).
+    ///
+    /// The geometric stiffness is `K_g = Σ J_sᵀ B_s J_s` with
+    /// `B_s = G_{s+1} − G_s`, so link `s` carries `I_s + c_q (G_{s+1} − G_s)`.
+    /// The sweep runs on the shifted articulated inertia
+    /// `Ĩ_s = I^A_s + c_q G_s`, which obeys the plain recursion
+    /// `Ĩ_s = I_s + Ĩ_{s+1} − U_{s+1} U_{s+1}ᵀ / D_{s+1}`, and needs `G_s` only
+    /// through `U_s = Ĩ_s S_s − c_q G_s S_s`: no 6×6 geometric block is formed.
+    pub fn solve_into(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
+        let mut aba = AbaCarry::default();
+        let tree = !self.limbs.is_empty();
+        if tree {
+            self.limb_carry.iter_mut().for_each(|c| *c = LimbCarry::default());
+        }
+        let mut next_limb = self.limbs.len();
+        for s in (0..self.joints.len()).rev() {
+            if tree && self.limb_parent[s] != u32::MAX {
+                let c = self.limb_carry[self.limb_parent[s] as usize];
+                aba.inertia += c.inertia;
+                aba.bias += c.bias;
+            }
+            self.eliminate(&mut aba, s, c_v, c_q, b)?;
+            if tree && self.limb_start[s] {
+                next_limb -= 1;
+                if let Some(p) = self.limbs[next_limb].parent {
+                    let carry = LimbCarry { inertia: aba.inertia, bias: aba.bias, ..Default::default() };
+                    self.limb_carry[self.limb_parent[p] as usize].add(&carry);
+                }
+                aba = AbaCarry::default();
+            }
+        }
+        self.forward_solve(x);
+        Ok(())
+    }
+
+    /// Tip-to-base elimination of sub-joint `s` (right-hand side `b`): a
+    /// single sub-joint, the second or third sub-joint of a rotation-spring
+    /// block (only its link is added; the block is eliminated at its first
+    /// sub-joint), or a whole block.
+    fn eliminate(&mut self, aba: &mut AbaCarry, s: usize, c_v: f64, c_q: f64, b: &[f64]) -> Result<(), SystemError> {
+        let slot = self.link_slot[s];
+        if slot != u32::MAX {
+            let ls = &self.links[slot as usize];
+            aba.add_link(ls, &self.anchor_blocks, c_v, c_q);
+        }
+        match self.block[s] {
+            u32::MAX => aba.down(s, &mut self.rows[s], c_v, c_q, b[s]),
+            BLOCK_INNER => Ok(()),
+            k => {
+                let rs = &self.rotation_springs[k as usize];
+                let (a_mat, pinv) = &mut self.rot_scratch[k as usize];
+                aba.down_block(s, &mut self.rows[s..s + 3], rs, a_mat, pinv, c_v, c_q, [b[s], b[s + 1], b[s + 2]])
+            }
+        }
+    }
+
+    /// Base-to-tip half of the articulated-body solve.
+    fn forward_solve(&mut self, x: &mut [f64]) {
+        let mut acc = V6::ZERO;
+        let n = self.rows.len();
+        let tree = !self.limbs.is_empty();
+        let mut next_limb = 0;
+        let mut s = 0;
+        while s < n {
+            if tree {
+                if s > 0 && self.limb_parent[s - 1] != u32::MAX {
+                    // (Blocks never contain a parent link: s − 1 was done
+                    // alone, and `acc` is its acceleration.)
+                    self.limb_acc[self.limb_parent[s - 1] as usize] = acc;
+                }
+                if self.limb_start[s] {
+                    acc = match self.limbs[next_limb].parent {
+                        None => V6::ZERO,
+                        Some(p) => self.limb_acc[self.limb_parent[p] as usize],
+                    };
+                    next_limb += 1;
+                }
+            }
+            match self.block[s] {
+                u32::MAX | BLOCK_INNER => {
+                    let row = &self.rows[s];
+                    let xs = (row.u - row.u_vec.dot(acc)) * row.d;
+                    x[s] = xs;
+                    acc += row.s * xs;
+                    s += 1;
+                }
+                k => {
+                    let f = &self.rows[s..s + 3];
+                    let y = DVec3::new(f[0].u - f[0].u_vec.dot(acc), f[1].u - f[1].u_vec.dot(acc), f[2].u - f[2].u_vec.dot(acc));
+                    let xb = self.rot_scratch[k as usize].1 * y;
+                    x[s] = xb.x;
+                    x[s + 1] = xb.y;
+                    x[s + 2] = xb.z;
+                    acc += f[0].s * xb.x + f[1].s * xb.y + f[2].s * xb.z;
+                    s += 3;
+                }
+            }
+        }
+    }
+}
+
+/// Deviation rotation vector `θ = log(R₀ᵀ R)` of a rotation spring, and
+/// `R₀ᵀ E_k` for its three axes.
+pub(super) fn rotation_deviation(rs: &RotationSpring, joints: &[SubJoint], q: &[f64]) -> (DVec3, [DVec3; 3]) {
+    let f = rs.first;
+    let rel = |a: f64, b: f64, c: f64| {
+        let rz = rotate_about(DMat3::IDENTITY, DVec3::Z, a);
+        let rzy = rotate_about(rz, DVec3::Y, b);
+        (rz, rzy, rotate_about(rzy, DVec3::X, c))
+    };
+    let (rz, rzy, r) = rel(q[f], q[f + 1], q[f + 2]);
+    let rests = (joints[f].rest, joints[f + 1].rest, joints[f + 2].rest);
+    if rests == (0.0, 0.0, 0.0) {
+        return (rotation_vector(&r), [DVec3::Z, rz.y_axis, rzy.x_axis]);
+    }
+    let (_, _, r0) = rel(rests.0, rests.1, rests.2);
+    let r0t = r0.transpose();
+    let theta = rotation_vector(&(r0t * r));
+    (theta, [r0t * DVec3::Z, r0t * rz.y_axis, r0t * rzy.x_axis])
+}
+
+/// A rotation spring's generalized forces on its three sub-joints and
+/// `A = ∂θ/∂(a, b, c)` (the columns `J_l⁻¹ R₀ᵀ E_k`).
+pub(super) fn rotation_spring_forces(rs: &RotationSpring, joints: &[SubJoint], q: &[f64], v: &[f64]) -> ([f64; 3], DMat3) {
+    let (theta, axes) = rotation_deviation(rs, joints, q);
+    let f = rs.first;
+    let omega = axes[0] * v[f] + axes[1] * v[f + 1] + axes[2] * v[f + 2];
+    // J_l⁻¹(θ) x = x − ½ θ×x + β θ×(θ×x), β = (1 − (φ/2)cot(φ/2))/φ²;
+    // J_l⁻ᵀ(θ) = J_l⁻¹(−θ).
+    let phi2 = theta.length_squared();
+    let beta = if phi2 < 1e-6 {
+        1.0 / 12.0 + phi2 / 720.0
+    } else {
+        let phi = phi2.sqrt();
+        (1.0 - 0.5 * phi / (0.5 * phi).tan()) / phi2
+    };
+    let jinv = |x: DVec3, sign: f64| x - 0.5 * sign * theta.cross(x) + beta * theta.cross(theta.cross(x));
+    let theta_dot = jinv(omega, 1.0);
+    let moment = rs.k * theta + rs.k * theta_dot * rs.tau;
+    // Q_k = (Kθ + τKθ̇)ᵀ J⁻¹ E_k = (J⁻ᵀ m)·E_k.
+    let m = jinv(moment, -1.0);
+    ([m.dot(axes[0]), m.dot(axes[1]), m.dot(axes[2])], DMat3::from_cols(jinv(axes[0], 1.0), jinv(axes[1], 1.0), jinv(axes[2], 1.0)))
+}
+
+/// Tip-to-base state of the articulated-body solve: the shifted
+/// articulated inertia `Ĩ` and bias carried to the parent.
+#[derive(Default)]
+struct AbaCarry {
+    inertia: M6,
+    bias: V6,
+}
+
+impl AbaCarry {
+    /// One sub-joint of the backward sweep (see [`Chain::solve_into`]).
+    #[inline]
+    fn down(&mut self, s: usize, row: &mut Row, c_v: f64, c_q: f64, b: f64) -> Result<(), SystemError> {
+        let uv = self.inertia.mul_motion(row.s) - row.gs * c_q;
+        let armature = c_v * row.damping + c_q * row.stiffness;
+        let d = row.s.dot(uv) + armature;
+        // The effective matrix may be indefinite (compression, large c_q);
+        // only a vanishing pivot is fatal: |d| ≲ 1e-14 (|S||U| + |armature|).
+        if !d.is_finite() || d * d <= 1e-28 * (row.s.dot(row.s) * uv.dot(uv) + armature * armature) {
+            return Err(SystemError::Singular { index: s, pivot: d });
+        }
+        let inv_d = 1.0 / d;
+        let u = b - row.s.dot(self.bias);
+        row.u_vec = uv;
+        row.d = inv_d;
+        row.u = u;
+        self.inertia.add_outer(uv, uv, -inv_d);
+        self.bias += uv * (u * inv_d);
+        Ok(())
+    }
+
+    /// Adds a link's inertia (and implicit anchor springs).
+    #[inline]
+    fn add_link(&mut self, ls: &LinkScratch, anchor_blocks: &[(M6, M6)], c_v: f64, c_q: f64) {
+        self.inertia.a += ls.ia;
+        self.inertia.b += ls.ib;
+        self.inertia.c += ls.ib.transpose();
+        self.inertia.d += DMat3::from_diagonal(DVec3::splat(ls.m));
+        let (ld, ad) = ls.damping;
+        if ld != 0.0 || ad != 0.0 {
+            // Velocity damping −c_l m v_c, −c_a I_c ω: tangent
+            // c_l [[m c×c×ᵀ, m c×], [m c×ᵀ, m]] + c_a [[I_c, 0], [0, 0]].
+            let mcc = ls.ib * ls.ib.transpose() * (1.0 / ls.m);
+            let ic = ls.ia - mcc;
+            self.inertia.a += (mcc * ld + ic * ad) * c_v;
+            self.inertia.b += ls.ib * (ld * c_v);
+            self.inertia.c += ls.ib.transpose() * (ld * c_v);
+            self.inertia.d += DMat3::from_diagonal(DVec3::splat(ls.m * ld * c_v));
+        }
+        if ls.anchor != u32::MAX {
+            let (k, c) = &anchor_blocks[ls.anchor as usize];
+            self.inertia.add_scaled(k, c_q);
+            self.inertia.add_scaled(c, c_v);
+        }
+    }
+
+    /// Three coupled revolute sub-joints (a rotation spring) eliminated
+    /// together with a 3×3 pivot: `P_kl = S_k·U_l` (k ≤ l, symmetric) plus
+    /// the law's Gauss–Newton stiffness `(c_q + c_v τ) Aᵀ K A`, with
+    /// `U_k = Ĩ S_k − c_q G_k S_k` (no mass sits between the three).
+    #[allow(clippy::too_many_arguments)]
+    fn down_block(
+        &mut self,
+        s: usize,
+        f: &mut [Row],
+        rs: &RotationSpring,
+        a_mat: &DMat3,
+        pinv: &mut DMat3,
+        c_v: f64,
+        c_q: f64,
+        b: [f64; 3],
+    ) -> Result<(), SystemError> {
+        let u: [V6; 3] = [0, 1, 2].map(|k| self.inertia.mul_vec(f[k].s) - f[k].gs * c_q);
+        let mut p = [[0.0; 3]; 3];
+        for k in 0..3 {
+            for l in k..3 {
+                p[k][l] = f[k].s.dot(u[l]);
+                p[l][k] = p[k][l];
+            }
+        }
+        let ka = DMat3::from_cols(a_mat.x_axis * rs.k, a_mat.y_axis * rs.k, a_mat.z_axis * rs.k);
+        let h = a_mat.transpose() * ka * (c_q + c_v * rs.tau);
+        let pm = DMat3::from_cols_array_2d(&p) + h;
+        let det = pm.determinant();
+        let scale = pm.x_axis.length() * pm.y_axis.length() * pm.z_axis.length();
+        if !det.is_finite() || det.abs() <= 1e-14 * scale {
+            return Err(SystemError::Singular { index: s, pivot: det });
+        }
+        *pinv = pm.inverse();
+        let ub = DVec3::new(b[0] - f[0].s.dot(self.bias), b[1] - f[1].s.dot(self.bias), b[2] - f[2].s.dot(self.bias));
+        let y = *pinv * ub;
+        for k in 0..3 {
+            f[k].u_vec = u[k];
+            f[k].u = ub[k];
+            let w = u[0] * pinv.col(k).x + u[1] * pinv.col(k).y + u[2] * pinv.col(k).z;
+            self.inertia.add_outer(w, u[k], -1.0);
+        }
+        self.bias += u[0] * y.x + u[1] * y.y + u[2] * y.z;
+        Ok(())
+    }
+}
+
+/// Marker in [`Chain::block`] for the second and third sub-joint of a block.
+pub(crate) const BLOCK_INNER: u32 = u32::MAX - 1;
+
+/// The world state of `local_point` on the link at `ps`, and the point
+/// relative to `origin`.
+pub(super) fn point_state(ps: &Pose, origin: DVec3, local_point: DVec3) -> (PointState, DVec3) {
+    let p = ps.pos + ps.rot * local_point;
+    (PointState { rotation: ps.rot, point: p + origin, velocity: ps.vel.bot + ps.vel.top.cross(p), angular_velocity: ps.vel.top }, p)
+}
+
+/// Evaluates a force element at `local_point` of the link at `ps` and adds
+/// its wrench to the link's load, the moment-arm tangent to the link's load
+/// tangent, and its stiffness and damping (moved to the spatial frame) to
+/// the link's implicit blocks.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn apply_force_element(
+    ls: &mut LinkScratch,
+    blocks: &mut [(M6, M6)],
+    ps: &Pose,
+    origin: DVec3,
+    local_point: DVec3,
+    t: f64,
+    element: &dyn ForceElement,
+) {
+    let (at, p) = point_state(ps, origin, local_point);
+    let w = element.wrench(t, &at);
+    let px = skew(p);
+    let (k, c) = &mut blocks[ls.anchor as usize];
+    k.add_scaled(&point_to_spatial(&w.stiffness, px), 1.0);
+    c.add_scaled(&point_to_spatial(&w.damping, px), 1.0);
+    ls.f += V6::new(p.cross(w.force) + w.moment, w.force);
+    ls.add_point_load_tangent(w.force, p);
+}
+
+/// The rotation vector `θ = log(R)`, accurate to round-off for small angles
+/// (`2 atan2(|v|, w)` on the quaternion, not `2 acos(w)`, which loses half
+/// the digits near zero).
+pub(crate) fn rotation_vector(r: &DMat3) -> DVec3 {
+    // 2 sin φ · axis = vee(R − Rᵀ); 2 cos φ = tr R − 1.
+    let w = 0.5 * DVec3::new(r.y_axis.z - r.z_axis.y, r.z_axis.x - r.x_axis.z, r.x_axis.y - r.y_axis.x);
+    let s2 = w.length_squared();
+    let c = 0.5 * (r.x_axis.x + r.y_axis.y + r.z_axis.z - 1.0);
+    if c > 0.0 && s2 < 2.5e-3 {
+        // φ/sin φ = asin(s)/s = 1 + s²/6 + 3s⁴/40 + 5s⁶/112 + 35s⁸/1152 (s < 0.05: < 2e-14).
+        return w * (1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * (5.0 / 112.0 + s2 * (35.0 / 1152.0)))));
+    }
+    let q = DQuat::from_mat3(r);
+    let q = if q.w < 0.0 { -q } else { q };
+    let v = DVec3::new(q.x, q.y, q.z);
+    let s = v.length();
+    if s < 1e-300 {
+        return v * 2.0;
+    }
+    v * (2.0 * s.atan2(q.w) / s)
+}
+
+/// `(sin x, cos x)`; Taylor polynomials for |x| < 0.03 (truncation below
+/// 1e-19, i.e. round-off), the library otherwise. Relative rotations of
+/// rope elements are almost always that small.
+#[inline]
+pub(super) fn small_sin_cos(x: f64) -> (f64, f64) {
+    if x.abs() < 0.03 {
+        let x2 = x * x;
+        let s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
+        let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+        (s, c)
+    } else {
+        x.sin_cos()
+    }
+}
+
+/// `r · R(axis, angle)` for a unit axis; fast paths for the principal axes.
+#[inline]
+pub(super) fn rotate_about(r: DMat3, axis: DVec3, angle: f64) -> DMat3 {
+    rotate_about_id(r, axis_id(axis), axis, angle)
+}
+
+/// Classifies a joint axis for [`rotate_about_id`]: 0, 1, 2 for the unit
+/// x, y, z axes, 3 for any other.
+#[inline]
+pub(super) fn axis_id(axis: DVec3) -> u8 {
+    if axis == DVec3::X {
+        0
+    } else if axis == DVec3::Y {
+        1
+    } else if axis == DVec3::Z {
+        2
+    } else {
+        3
+    }
+}
+
+/// [`rotate_about`] with the axis already classified (0, 1, 2 = x, y, z;
+/// anything else = the general `axis`).
+#[inline]
+pub(super) fn rotate_about_id(r: DMat3, id: u8, axis: DVec3, angle: f64) -> DMat3 {
+    let (sn, cs) = small_sin_cos(angle);
+    match id {
+        0 => DMat3::from_cols(r.x_axis, r.y_axis * cs + r.z_axis * sn, r.z_axis * cs - r.y_axis * sn),
+        1 => DMat3::from_cols(r.x_axis * cs - r.z_axis * sn, r.y_axis, r.x_axis * sn + r.z_axis * cs),
+        2 => DMat3::from_cols(r.x_axis * cs + r.y_axis * sn, r.y_axis * cs - r.x_axis * sn, r.z_axis),
+        _ => r * DMat3::from_axis_angle(axis, angle),
+    }
+}
+
+#[cfg(test)]
+pub(crate) fn small_sin_cos_for_tests(x: f64) -> (f64, f64) {
+    small_sin_cos(x)
+}
