@@ -20,6 +20,10 @@
 //!   `residual/N` and `solve/N` time the two halves, `fused/N` the fused
 //!   `Chain::residual_and_correction_into` that Newton calls once per
 //!   iteration (residual and backward sweep in one tip-to-base pass).
+//! * `step_fast/N`: one frame step of the same swing with the fast preset
+//!   (`Scheme::LinearlyImplicit`, w = 0.55: two residuals and one solve, no
+//!   Newton loop), steps without reset; the summary prints the ratio
+//!   `step/N` ÷ `step_fast/N`.
 //!
 //! N = 10, 100, 1 000, 10 000 elements (6 sub-joints each). Before timing,
 //! the Newton work per step is printed (mean/min/max over the 60 steps of
@@ -74,9 +78,18 @@ fn swing_model(n: usize, deg: f64) -> RopeModel {
         .expect("valid rope")
 }
 
+/// The fast preset (`Scheme::LinearlyImplicit`, w = 0.55): one linearised
+/// solve per step, no Newton loop.
+const FAST: Scheme = Scheme::LinearlyImplicit { w: 0.55 };
+
 /// A cable advanced `PRE_STEPS` steps from its release: mid-swing.
 fn mid_swing(n: usize) -> Cable {
-    let mut cable = Cable::new(swing_model(n, RELEASE_DEG), Scheme::default()).expect("initial state");
+    mid_swing_with(n, Scheme::default())
+}
+
+/// [`mid_swing`] with another integration scheme.
+fn mid_swing_with(n: usize, scheme: Scheme) -> Cable {
+    let mut cable = Cable::new(swing_model(n, RELEASE_DEG), scheme).expect("initial state");
     for k in 0..PRE_STEPS {
         cable.step(H).unwrap_or_else(|e| panic!("N = {n}: pre-advance step {k} failed: {e}"));
     }
@@ -292,6 +305,28 @@ fn run<M: Measurement<Value = Duration>>(mut c: Criterion<M>, clock: Clock) {
         group.finish();
     }
 
+    {
+        // The fast preset, steps without reset (it keeps no predictor
+        // history beyond the state's acceleration).
+        let mut group = c.benchmark_group("step_fast");
+        for n in &sizes {
+            let n = *n;
+            configure(&mut group, n);
+            group.throughput(Throughput::Elements(n as u64));
+            let mut cable = mid_swing_with(n, FAST);
+            group.bench_function(BenchmarkId::from_parameter(n), |b| {
+                b.iter_custom(|iters| {
+                    clock.time(|| {
+                        for _ in 0..iters {
+                            black_box(cable.step(H).expect("fast step"));
+                        }
+                    })
+                })
+            });
+        }
+        group.finish();
+    }
+
     for (name, what) in [("pass", 3u8), ("fused", 4), ("residual", 1), ("solve", 2)] {
         let mut group = c.benchmark_group(name);
         for (n, cable, _) in cables.iter_mut() {
@@ -351,17 +386,17 @@ fn exponent(points: &[(f64, f64)]) -> Option<f64> {
 }
 
 fn report(work: &[(usize, &Work)]) {
-    const GROUPS: [&str; 6] = ["step", "pass", "fused", "residual", "solve", "step_continuous"];
+    const GROUPS: [&str; 7] = ["step", "pass", "fused", "residual", "solve", "step_continuous", "step_fast"];
     println!("\n== summary (criterion medians from {}) ==", criterion_dir().display());
-    println!("| N | step µs | µs/element/step | Newton it/step (window; timed) | sweeps/step | pass µs | ns/element/pass | fused µs | residual µs | solve µs | continuous step µs (Newton it/step, simulated s) |");
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("| N | step µs | µs/element/step | Newton it/step (window; timed) | sweeps/step | pass µs | ns/element/pass | fused µs | residual µs | solve µs | continuous step µs (Newton it/step, simulated s) | fast preset step µs (default/fast) |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut fits: Vec<(&str, Vec<(f64, f64)>)> = GROUPS.iter().map(|g| (*g, vec![])).collect();
     for (n, w) in work {
         let t: Vec<Option<f64>> = GROUPS.iter().map(|g| median_ns(g, *n)).collect();
         let us = |x: Option<f64>| x.map_or("–".to_string(), |v| format!("{:.1}", v / 1e3));
         let per = |x: Option<f64>, k: f64| x.map_or("–".to_string(), |v| format!("{:.2}", v / k / *n as f64));
         println!(
-            "| {} | {} | {} | {:.2}; {:.2} | {:.2} | {} | {} | {} | {} | {} | {} ({:.2}, {:.0}) |",
+            "| {} | {} | {} | {:.2}; {:.2} | {:.2} | {} | {} | {} | {} | {} | {} ({:.2}, {:.0}) | {} ({}) |",
             n,
             us(t[0]),
             per(t[0], 1e3),
@@ -375,7 +410,9 @@ fn report(work: &[(usize, &Work)]) {
             us(t[4]),
             us(t[5]),
             w.continuous_newton,
-            w.continuous_seconds
+            w.continuous_seconds,
+            us(t[6]),
+            t[0].zip(t[6]).map_or("–".to_string(), |(d, f)| format!("{:.2}×", d / f))
         );
         if *n >= 100 {
             for (k, f) in fits.iter_mut().enumerate() {
