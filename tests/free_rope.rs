@@ -23,7 +23,7 @@ fn momenta(c: &Cable) -> (DVec3, DVec3, DVec3) {
     let ch = &c.model.chain;
     let (mut p, mut l, mut mc, mut m) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO, 0.0);
     for s in 0..ch.len() {
-        if let Some(lm) = ch.joints[s].link {
+        if let Some(lm) = ch.joints()[s].link {
             let com = ch.link_point(s, lm.com);
             let v = ch.link_point_velocity(s, lm.com);
             let r: DMat3 = ch.link_rotation(s);

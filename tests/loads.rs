@@ -76,13 +76,13 @@ fn moving_loads_to_other_links_rebuilds_the_layout() {
     let n = q.len();
     let mut moved = c.model.chain.clone();
     let mut r = vec![0.0; n];
-    moved.loads = vec![load(0), load(40)];
+    *moved.loads_mut() = vec![load(0), load(40)];
     moved.residual_into(0.0, &q, &v, &a, &mut r).unwrap();
-    moved.loads = vec![load(1), load(9)];
+    *moved.loads_mut() = vec![load(1), load(9)];
     let mut r_moved = vec![0.0; n];
     moved.residual_into(0.0, &q, &v, &a, &mut r_moved).unwrap();
     let mut fresh = c.model.chain.clone();
-    fresh.loads = vec![load(1), load(9)];
+    *fresh.loads_mut() = vec![load(1), load(9)];
     let mut r_fresh = vec![0.0; n];
     fresh.residual_into(0.0, &q, &v, &a, &mut r_fresh).unwrap();
     assert_eq!(r_moved, r_fresh);

@@ -238,7 +238,7 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
         for (shape, path) in slack_paths() {
             let model = RopeBuilder::new(12.0, n, section, 0.02)
                 .start(RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO))))
-                .end(RopeEnd::Pinned(std::sync::Arc::new(move |_| (b, DVec3::ZERO))))
+                .end(RopeEnd::Pinned(BaseMotion::point(b)))
                 .path(path)
                 .velocity_damping(2.0, 2.0)
                 .build()
@@ -270,7 +270,7 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
             // the (perfectly flexible) catenary's.
             let mut stat = RopeBuilder::new(12.0, n, section, 0.02)
                 .start(RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO))))
-                .end(RopeEnd::Pinned(std::sync::Arc::new(move |_| (b, DVec3::ZERO))))
+                .end(RopeEnd::Pinned(BaseMotion::point(b)))
                 .path(slack_paths()[1].1.clone())
                 .build()
                 .unwrap();

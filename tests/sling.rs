@@ -6,7 +6,6 @@
 use bevy_rapier_cable::cable::*;
 use bevy_rapier_cable::integrate::Scheme;
 use glam::{DMat3, DVec3};
-use std::sync::Arc;
 
 #[path = "common/irvine.rs"]
 mod irvine;
@@ -37,7 +36,7 @@ fn sling(anchors: &[DVec3], apex: DVec3, mass: f64, n: usize, section: RopeSecti
             .damping(damping)
             .start(RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, apex))))
             .path(vec![apex, a])
-            .end(RopeEnd::Pinned(Arc::new(move |_| (a, DVec3::ZERO))))
+            .end(RopeEnd::Pinned(BaseMotion::point(a)))
             .build()
             .unwrap();
         model.graft(leg, &at, true).unwrap();

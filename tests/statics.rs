@@ -3,7 +3,6 @@
 
 use bevy_rapier_cable::cable::*;
 use glam::{DMat3, DVec3};
-use std::sync::Arc;
 
 fn section(mu: f64, ea: f64, ei: f64, gj: f64) -> RopeSection {
     RopeSection { linear_density: mu, ea, ei, ei2: ei, gj, min_breaking_load: 0.0 }
@@ -58,11 +57,11 @@ fn cantilever(n: usize) -> RopeModel {
 fn load_tip(model: &mut RopeModel, force: DVec3, moment: DVec3, steps: usize) -> (DVec3, DVec3) {
     let tip = model.layout.element_link(model.layout.elements - 1);
     let le = model.layout.element_length;
-    model.chain.loads.push(LinkLoad { link: tip, force: DVec3::ZERO, local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
+    model.chain.loads_mut().push(LinkLoad { link: tip, force: DVec3::ZERO, local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
     let mut q = model.q0.clone();
     for k in 1..=steps {
         let f = k as f64 / steps as f64;
-        let ld = model.chain.loads.last_mut().unwrap();
+        let ld = model.chain.loads_mut().last_mut().unwrap();
         ld.force = force * f;
         ld.moment = moment * f;
         model.chain.solve_static(0.0, &mut q, 1e-13, 200).unwrap();
@@ -132,7 +131,7 @@ fn elastic_catenary_level_supports() {
         let mut m = RopeBuilder::new(l0, n, section(10.0 / g, ea, 1e-3, 1e-3), 0.02)
             .path(path)
             .start(RopeStart::Pinned(fixed_at(DVec3::ZERO)))
-            .end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO))))
+            .end(RopeEnd::Pinned(BaseMotion::point(end)))
             .gravity(DVec3::new(0.0, -g, 0.0))
             .build()
             .unwrap();

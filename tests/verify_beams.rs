@@ -9,7 +9,6 @@
 use bevy_rapier_cable::cable::*;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
-use std::sync::Arc;
 
 fn section(mu: f64, ea: f64, ei: f64, gj: f64) -> RopeSection {
     RopeSection { linear_density: mu, ea, ei, ei2: ei, gj, min_breaking_load: 0.0 }
@@ -35,14 +34,14 @@ fn bend45(n: usize, gj_factor: f64, increments: usize, p_max: f64, rot: DMat3) -
     let mut out = Vec::new();
     for k in 1..=increments {
         let p = p_max * k as f64 / increments as f64;
-        m.chain.loads[0].force = rot * DVec3::new(0.0, p, 0.0);
+        m.chain.loads_mut()[0].force = rot * DVec3::new(0.0, p, 0.0);
         m.chain.solve_static(0.0, &mut q, 1e-10, 400).unwrap();
         out.push((p, rot.transpose() * (m.nodes()[n] - initial)));
     }
     out
 }
 
-/// The 45° bend model of [`bend45`] with a zero tip load (`chain.loads[0]`)
+/// The 45° bend model of [`bend45`] with a zero tip load (`chain.loads()[0]`)
 /// and its initial tip position.
 fn bend45_model(n: usize, gj_factor: f64, rot: DMat3) -> (RopeModel, DVec3) {
     let r = 100.0;
@@ -75,7 +74,7 @@ fn bend45_model(n: usize, gj_factor: f64, rot: DMat3) -> (RopeModel, DVec3) {
     assert!(initial.distance(expected) < 1e-9, "initial tip {initial:?}");
     let tip = m.layout.element_link(n - 1);
     let le = m.layout.element_length;
-    m.chain.loads.push(LinkLoad { link: tip, force: DVec3::ZERO, local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
+    m.chain.loads_mut().push(LinkLoad { link: tip, force: DVec3::ZERO, local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
     (m, initial)
 }
 
@@ -94,10 +93,10 @@ fn bend45_internal_forces_match_statics() {
     let (mut m, _) = bend45_model(n, 1.0, rot);
     let mut q = m.q0.clone();
     for k in 1..=10 {
-        m.chain.loads[0].force = rot * DVec3::new(0.0, 60.0 * k as f64, 0.0);
+        m.chain.loads_mut()[0].force = rot * DVec3::new(0.0, 60.0 * k as f64, 0.0);
         m.chain.solve_static(0.0, &mut q, 1e-10, 400).unwrap();
     }
-    let force = m.chain.loads[0].force;
+    let force = m.chain.loads()[0].force;
     let v = vec![0.0; q.len()];
     let nodes = m.nodes();
     let tip = nodes[n];
@@ -257,12 +256,12 @@ fn straight_cantilever_convergence_order_2d_vs_3d() {
             .unwrap();
         let tip = m.layout.element_link(n - 1);
         let le = m.layout.element_length;
-        m.chain.loads.push(LinkLoad { link: tip, force: DVec3::ZERO, local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
+        m.chain.loads_mut().push(LinkLoad { link: tip, force: DVec3::ZERO, local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
         let mut q = m.q0.clone();
         for k in 1..=20 {
             let f = k as f64 / 20.0;
-            m.chain.loads[0].force = force * f;
-            m.chain.loads[0].moment = moment * f;
+            m.chain.loads_mut()[0].force = force * f;
+            m.chain.loads_mut()[0].moment = moment * f;
             m.chain.solve_static(0.0, &mut q, 1e-13, 300).unwrap();
         }
         m.nodes()[n]
@@ -330,17 +329,22 @@ fn cable_midspan_point_load() {
         let mut m = RopeBuilder::new(l0, n, section(1.0, ea, 1e-3, 1e-3), 0.01)
             .path(vec![DVec3::ZERO, end])
             .start(RopeStart::Pinned(fixed(DMat3::IDENTITY, DVec3::ZERO)))
-            .end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO))))
+            .end(RopeEnd::Pinned(BaseMotion::point(end)))
             .gravity(DVec3::ZERO)
             .build()
             .unwrap();
         let le = m.layout.element_length;
         // Node n/2 is the outboard end of element n/2 − 1.
-        m.chain.loads.push(LinkLoad { link: m.layout.element_link(n / 2 - 1), force: DVec3::ZERO, local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
+        m.chain.loads_mut().push(LinkLoad {
+            link: m.layout.element_link(n / 2 - 1),
+            force: DVec3::ZERO,
+            local_point: DVec3::new(le, 0.0, 0.0),
+            moment: DVec3::ZERO,
+        });
         let mut q = m.q0.clone();
         let steps = 10;
         for k in 1..=steps {
-            m.chain.loads[0].force = DVec3::new(0.0, -p * k as f64 / steps as f64, 0.0);
+            m.chain.loads_mut()[0].force = DVec3::new(0.0, -p * k as f64 / steps as f64, 0.0);
             if let Err(e) = m.chain.solve_static(0.0, &mut q, 1e-10, 500) {
                 panic!("T0={t0} P={p}: {e}");
             }
@@ -423,10 +427,10 @@ fn mattiasson_convergence_in_n() {
         let mut m = cantilever(n);
         let tip = m.layout.element_link(n - 1);
         let le = m.layout.element_length;
-        m.chain.loads.push(LinkLoad { link: tip, force: DVec3::ZERO, local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
+        m.chain.loads_mut().push(LinkLoad { link: tip, force: DVec3::ZERO, local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
         let mut q = m.q0.clone();
         for k in 1..=10 {
-            m.chain.loads[0].force = DVec3::new(0.0, -alpha * k as f64 / 10.0, 0.0);
+            m.chain.loads_mut()[0].force = DVec3::new(0.0, -alpha * k as f64 / 10.0, 0.0);
             m.chain.solve_static(0.0, &mut q, 1e-13, 300).unwrap();
         }
         let w = -m.nodes()[n].y;
@@ -558,7 +562,7 @@ fn cantilever_natural_frequencies() {
         let dof = q.len();
         let m = mass_matrix(&mut model.chain, &q);
         let asym = (0..dof).flat_map(|i| (0..dof).map(move |j| (i, j))).map(|(i, j)| (m[i][j] - m[j][i]).abs()).fold(0.0, f64::max);
-        let k: Vec<f64> = model.chain.joints.iter().map(|j| j.stiffness).collect();
+        let k: Vec<f64> = model.chain.joints().iter().map(|j| j.stiffness).collect();
         // K = diag(k): central differences of the residual in q.
         let kmax = k.iter().cloned().fold(0.0, f64::max);
         let zero = vec![0.0; dof];
@@ -600,7 +604,7 @@ fn cantilever_natural_frequencies() {
     let q = model.q0.clone();
     let lay = model.layout;
     let m = mass_matrix(&mut model.chain, &q);
-    let k: Vec<f64> = model.chain.joints.iter().map(|j| j.stiffness).collect();
+    let k: Vec<f64> = model.chain.joints().iter().map(|j| j.stiffness).collect();
     let axial: Vec<usize> = (0..n).map(|i| lay.dof(i, 3)).collect();
     let torsion: Vec<usize> = (0..n).map(|i| lay.dof(i, 2)).collect();
     let kind = |j: usize| (j - lay.first) % 6;
@@ -671,14 +675,14 @@ fn free_free_natural_frequencies_and_rigid_modes() {
             law: SpringLaw::Linear,
         };
         let mut joints = vec![free(DVec3::X), free(DVec3::Y), free(DVec3::Z)];
-        joints.extend(src.joints.iter().cloned());
+        joints.extend(src.joints().iter().cloned());
         let first = 3 + lay.first;
         joints[first + 2].stiffness = 0.0; // torsion of the first joint
         let mut chain = Chain::new(joints, src.base.clone(), DVec3::ZERO, src.origin);
         let mut q = vec![0.0; 3];
         q.extend(model.q0.iter());
         let dof = q.len();
-        let k: Vec<f64> = chain.joints.iter().map(|j| j.stiffness).collect();
+        let k: Vec<f64> = chain.joints().iter().map(|j| j.stiffness).collect();
         let base: Vec<usize> = vec![0, 1, 2, first, first + 1, first + 2];
         assert!(base.iter().all(|&b| k[b] == 0.0));
         assert_eq!(k.iter().filter(|&&x| x == 0.0).count(), 6, "exactly six floating coordinates");
@@ -798,7 +802,7 @@ fn solve_static_stalls_on_soft_long_cantilever() {
         .unwrap();
     let tip = m.layout.element_link(15);
     let le = m.layout.element_length;
-    m.chain.loads.push(LinkLoad { link: tip, force: DVec3::new(0.0, 60.0, 0.0), local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
+    m.chain.loads_mut().push(LinkLoad { link: tip, force: DVec3::new(0.0, 60.0, 0.0), local_point: DVec3::new(le, 0.0, 0.0), moment: DVec3::ZERO });
     let mut q = m.q0.clone();
     let result = m.chain.solve_static(0.0, &mut q, 1e-10, 300);
     println!("{result:?}, tip {:?}", m.nodes()[16]);

@@ -12,7 +12,6 @@ use bevy_rapier_cable::cable::*;
 use bevy_rapier_cable::integrate::Scheme;
 use glam::{DMat3, DVec3};
 use std::f64::consts::PI;
-use std::sync::Arc;
 
 fn section(mu: f64, ea: f64, ei: f64, gj: f64) -> RopeSection {
     RopeSection { linear_density: mu, ea, ei, ei2: ei, gj, min_breaking_load: 0.0 }
@@ -80,7 +79,7 @@ fn taut_string(n: usize, mode: usize) -> StringRun {
     let mut model = RopeBuilder::new(l0, n, section(mu0, ea, 1e-6, 1e-6), diameter)
         .path(vec![DVec3::ZERO, end])
         .start(RopeStart::Pinned(fixed_at(DVec3::ZERO)))
-        .end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO))))
+        .end(RopeEnd::Pinned(BaseMotion::point(end)))
         .gravity(DVec3::ZERO)
         .build()
         .unwrap();
@@ -335,7 +334,7 @@ fn solve_static_stalls_at_roundoff_floor() {
     let mut model = RopeBuilder::new(l0, 40, section(1.0, ea, 1e-6, 1e-6), 1e-3)
         .path(vec![DVec3::ZERO, end])
         .start(RopeStart::Pinned(fixed_at(DVec3::ZERO)))
-        .end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO))))
+        .end(RopeEnd::Pinned(BaseMotion::point(end)))
         .gravity(DVec3::ZERO)
         .build()
         .unwrap();

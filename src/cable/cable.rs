@@ -204,8 +204,9 @@ impl Cable {
             let w_new = r.transpose() * w;
             [w_new.z, w_new.y, w_new.x]
         };
-        let joints = &mut self.model.chain.joints;
-        joints[s0].pre_rotation *= r;
+        if let Some(j) = self.model.chain.joint_mut_same_layout(s0) {
+            j.pre_rotation *= r;
+        }
         q[s0..s0 + 3].iter_mut().for_each(|x| *x = 0.0);
         let new = to_new(&self.state.v[s0..s0 + 3]);
         self.state.v[s0..s0 + 3].copy_from_slice(&new);
@@ -230,7 +231,7 @@ impl Cable {
             let gap = self.state.q[s];
             // A tension-only (slack) element may shorten freely: only its
             // stretch is bounded.
-            let tension_only = self.model.chain.joints[s].law == SpringLaw::TensionOnly;
+            let tension_only = self.model.chain.joints()[s].law == SpringLaw::TensionOnly;
             if gap > l.element_length || (!tension_only && gap < -l.element_length) {
                 return Err(CableError::Diverged {
                     time: self.state.t,
@@ -334,14 +335,14 @@ impl Cable {
         let Some((link, local_point)) = self.rope_point(rope, s) else {
             return false;
         };
-        self.model.chain.forces.push(AttachedForce { link, local_point, element });
+        self.model.chain.forces_mut().push(AttachedForce { link, local_point, element });
         true
     }
 
     /// Removes every force element added with [`Cable::add_force_element`]
     /// (the end springs stay).
     pub fn clear_force_elements(&mut self) {
-        self.model.chain.forces.clear();
+        self.model.chain.forces_mut().clear();
     }
 
     /// The link and the point in its frame at arc length `s` (m) of rope
@@ -356,7 +357,7 @@ impl Cable {
     /// Removes every external load (point and distributed). Force elements
     /// stay ([`Cable::clear_force_elements`]).
     pub fn clear_loads(&mut self) {
-        self.model.chain.loads.clear();
+        self.model.chain.loads_mut().clear();
     }
 
     /// Adds a point force (N, world frame) at arc length `s` (m, along the
@@ -385,7 +386,7 @@ impl Cable {
         let Some((link, local_point)) = self.rope_point(rope, s) else {
             return false;
         };
-        self.model.chain.loads.push(LinkLoad { link, force, local_point, moment });
+        self.model.chain.loads_mut().push(LinkLoad { link, force, local_point, moment });
         true
     }
 
@@ -413,21 +414,21 @@ impl Cable {
     /// Returns the iterations used in all. On failure the state and the
     /// loads are left as they were.
     pub fn solve_static(&mut self, load_steps: usize, tol: f64, max_iterations: usize) -> Result<usize, CableError> {
-        let steps = if self.model.chain.loads.is_empty() { 1 } else { load_steps.max(1) };
-        let full = self.model.chain.loads.clone();
+        let steps = if self.model.chain.loads().is_empty() { 1 } else { load_steps.max(1) };
+        let full = self.model.chain.loads().to_vec();
         let t = self.state.t;
         let mut q = self.state.q.clone();
         let mut iterations = 0;
         for step in 1..=steps {
             let f = step as f64 / steps as f64;
-            for (ld, full) in self.model.chain.loads.iter_mut().zip(&full) {
+            for (ld, full) in self.model.chain.loads_mut().iter_mut().zip(&full) {
                 ld.force = full.force * f;
                 ld.moment = full.moment * f;
             }
             match self.model.chain.solve_static(t, &mut q, tol, max_iterations) {
                 Ok(it) => iterations += it,
                 Err(source) => {
-                    self.model.chain.loads = full;
+                    *self.model.chain.loads_mut() = full;
                     self.refresh();
                     if let StaticError::Compressed { joint, force } = source {
                         if let Some((rope, element)) = self.element_of_joint(joint) {
@@ -438,7 +439,7 @@ impl Cable {
                 }
             }
         }
-        self.model.chain.loads = full;
+        *self.model.chain.loads_mut() = full;
         let old = std::mem::replace(&mut self.state.q, q);
         let old_v = std::mem::replace(&mut self.state.v, vec![0.0; old.len()]);
         let checked = match self.state.recompute_acceleration(&mut self.model.chain) {
@@ -588,7 +589,7 @@ impl Cable {
             let link = l.element_link(i);
             let (p, v) = (self.model.chain.link_point(link, mid), self.model.chain.link_point_velocity(link, mid));
             let force = load(i, p, v) * l.element_length;
-            self.model.chain.loads.push(LinkLoad { link, force, local_point: mid, moment: DVec3::ZERO });
+            self.model.chain.loads_mut().push(LinkLoad { link, force, local_point: mid, moment: DVec3::ZERO });
         }
     }
 
@@ -685,10 +686,11 @@ impl RopeView<'_> {
             // along the last element there (zero for a free end).
             let ch = &m.chain;
             let link = l.element_link(n - 1);
-            let tension = ch.anchors.iter().filter(|a| a.link == link).fold(0.0, |acc, a| {
+            let tension = ch.anchors().iter().filter(|a| a.link == link).fold(0.0, |acc, a| {
                 let p = ch.link_point(a.link, a.local_point);
                 let pv = ch.link_point_velocity(a.link, a.local_point);
-                let (target, target_v) = (a.target)(self.cable.state.t);
+                let target = a.target.at(self.cable.state.t);
+                let (target, target_v) = (target.position, target.velocity);
                 let force = -(p - target) * a.stiffness - (pv - target_v) * a.damping;
                 acc + force.dot(ch.link_rotation(link).x_axis)
             });

@@ -6,7 +6,10 @@ pub mod chain;
 pub mod force;
 pub use self::force::{AttachedForce, ForceElement, PointSpring, PointState, PointWrench};
 pub mod spatial;
-pub use self::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, Limb, LinkLoad, LinkMass, RotationSpring, SpringLaw, StaticError, SubJoint};
+pub use self::chain::{
+    AnchorSpring, BaseMotion, BaseState, Chain, ChainError, JointKind, Limb, LinkLoad, LinkMass, RotationSpring, SampledMotion, SpringLaw, StaticError,
+    SubJoint,
+};
 pub mod rope;
 pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeLayout, RopeModel, RopePart, RopeStart};
 #[allow(clippy::module_inception)]

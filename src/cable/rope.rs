@@ -24,7 +24,6 @@ use super::cable::ElementForces;
 use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkLoad, LinkMass, RotationSpring, SpringLaw, SubJoint};
 use super::material::RopeSection;
 use glam::{DMat3, DQuat, DVec3, EulerRot};
-use std::sync::Arc;
 use thiserror::Error;
 
 /// Sub-joints per rope element.
@@ -120,10 +119,11 @@ pub enum RopeStart {
 pub enum RopeEnd {
     /// Free end.
     Free,
-    /// Pinned to a world point (fixed or moving: `t ↦ (position, velocity)`).
-    Pinned(Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>),
+    /// Pinned to a world point: the origin of a fixed, sampled or
+    /// prescribed frame (`BaseMotion::point(p)` for a fixed point).
+    Pinned(BaseMotion),
     /// Clamped at a world point: position and the initial tangent held.
-    Clamped(Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>),
+    Clamped(BaseMotion),
     /// A body hangs on the end (hook, payload).
     Body {
         /// The body.
@@ -139,8 +139,8 @@ impl std::fmt::Debug for RopeEnd {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             RopeEnd::Free => f.write_str("Free"),
-            RopeEnd::Pinned(_) => f.write_str("Pinned(..)"),
-            RopeEnd::Clamped(_) => f.write_str("Clamped(..)"),
+            RopeEnd::Pinned(m) => f.debug_tuple("Pinned").field(m).finish(),
+            RopeEnd::Clamped(m) => f.debug_tuple("Clamped").field(m).finish(),
             RopeEnd::Body { body, anchor, clamp } => f.debug_struct("Body").field("body", body).field("anchor", anchor).field("clamp", clamp).finish(),
         }
     }
@@ -636,8 +636,8 @@ impl RopeBuilder {
         .fold(0.0, f64::max);
         let origin = start;
         let mut chain = Chain::new(joints, base, self.gravity, origin);
-        chain.anchors = anchors;
-        chain.rotation_springs = rotation_springs;
+        *chain.anchors_mut() = anchors;
+        *chain.rotation_springs_mut() = rotation_springs;
         chain.max_frequency = Some(omega2.sqrt());
         let layout = RopeLayout { elements: n, element_length: le, first, start_body, end_body, free_start };
         let zeros = vec![0.0; q0.len()];
@@ -692,7 +692,6 @@ impl RopeModel {
     /// use bevy_rapier_cable::cable::*;
     /// use bevy_rapier_cable::integrate::Scheme;
     /// use glam::{DMat3, DVec3};
-    /// use std::sync::Arc;
     ///
     /// let steel = preset("steel_wire_rope_6x36_iwrc", 0.02).unwrap();
     /// let (a, b, apex) = (DVec3::new(-6.0, 0.0, 0.0), DVec3::new(6.0, 0.0, 0.0), DVec3::new(0.0, -8.0, 0.0));
@@ -708,7 +707,7 @@ impl RopeModel {
     /// let leg = RopeBuilder::new(10.0, 10, steel, 0.02)
     ///     .start(fixed(apex))
     ///     .path(vec![apex, b])
-    ///     .end(RopeEnd::Pinned(Arc::new(move |_| (b, DVec3::ZERO))))
+    ///     .end(RopeEnd::Pinned(BaseMotion::point(b)))
     ///     .build()?;
     /// let part = model.graft(leg, &payload, true)?;
     /// let mut cable = Cable::new(model, Scheme::default()).unwrap();
@@ -741,7 +740,7 @@ impl RopeModel {
         self.chain.residual_into(0.0, &self.q0, &zeros, &zeros, &mut r).map_err(|e| RopeError::InvalidPath(format!("initial state: {e}")))?;
         let (rl, pl) = (self.chain.link_rotation(at.link), self.chain.link_point(at.link, DVec3::ZERO));
         let RopeModel { chain: oc, layout: ol, q0: oq0, section, diameter, length, .. } = other;
-        let mut joints = oc.joints;
+        let mut joints = oc.joints().to_vec();
         // Re-express the first joint frame in the body link's frame.
         let (rb, pb) = (base.rotation, base.position);
         let j0 = &mut joints[0];
@@ -749,13 +748,13 @@ impl RopeModel {
         j0.pre_rotation = rl.transpose() * rj;
         j0.offset = rl.transpose() * (pj - pl);
         let first = self.chain.add_limb(joints, Some(at.link)).map_err(RopeError::InvalidPath)?;
-        for (k, f) in oc.joint_forces.iter().enumerate() {
-            self.chain.joint_forces[first + k] = *f;
+        for (k, f) in oc.joint_forces().iter().enumerate() {
+            self.chain.set_joint_force(first + k, *f).map_err(|e| RopeError::InvalidPath(e.to_string()))?;
         }
-        self.chain.anchors.extend(oc.anchors.into_iter().map(|a| AnchorSpring { link: a.link + first, ..a }));
-        self.chain.loads.extend(oc.loads.into_iter().map(|l| LinkLoad { link: l.link + first, ..l }));
-        self.chain.rotation_springs.extend(oc.rotation_springs.into_iter().map(|rs| RotationSpring { first: rs.first + first, ..rs }));
-        self.chain.rotation_springs.sort_by_key(|rs| rs.first);
+        self.chain.anchors_mut().extend(oc.anchors().iter().map(|a| AnchorSpring { link: a.link + first, ..a.clone() }));
+        self.chain.loads_mut().extend(oc.loads().iter().map(|l| LinkLoad { link: l.link + first, ..*l }));
+        self.chain.rotation_springs_mut().extend(oc.rotation_springs().iter().map(|rs| RotationSpring { first: rs.first + first, ..*rs }));
+        self.chain.rotation_springs_mut().sort_by_key(|rs| rs.first);
         self.chain.max_frequency = match (self.chain.max_frequency, oc.max_frequency) {
             (Some(a), Some(b)) => Some(a.max(b)),
             _ => None,
@@ -790,7 +789,7 @@ impl RopeModel {
         let ch = &self.chain;
         let f = |k: usize| {
             let s = l.dof(i, k);
-            ch.joints[s].spring_force(q[s], v[s]).0
+            ch.joints()[s].spring_force(q[s], v[s]).0
         };
         let m = ch.link_rotation(l.element_link(i)).transpose() * ch.joint_moment(l.dof(i, 0), q, v);
         ElementForces { tension: f(3), shear: [f(4), f(5)], bending: [m.z, m.y], torsion: m.x }
@@ -831,6 +830,6 @@ impl RopeModel {
             return 0.0;
         }
         let s = self.layout.dof(i, 3);
-        self.chain.joints[s].spring_force(q[s], v[s]).0
+        self.chain.joints()[s].spring_force(q[s], v[s]).0
     }
 }

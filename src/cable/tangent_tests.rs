@@ -81,10 +81,10 @@ fn loaded_rope(end: RopeEnd, clamp: bool) -> RopeModel {
     // checked against its energy below); the exact parts of the tangent —
     // inertia, per-angle springs, geometric stiffness, anchors — are what
     // this test checks, so use per-angle springs here.
-    m.chain.rotation_springs.clear();
+    m.chain.rotation_springs_mut().clear();
     // A point load of fixed direction off the axis of element 2.
     let link = m.layout.element_link(2);
-    m.chain.loads.push(LinkLoad { link, force: DVec3::new(40.0, -25.0, 10.0), local_point: DVec3::new(0.1, 0.02, -0.03), moment: DVec3::ZERO });
+    m.chain.loads_mut().push(LinkLoad { link, force: DVec3::new(40.0, -25.0, 10.0), local_point: DVec3::new(0.1, 0.02, -0.03), moment: DVec3::ZERO });
     m
 }
 
@@ -107,7 +107,7 @@ fn tangent_matches_finite_differences_with_payload() {
 
 #[test]
 fn tangent_matches_finite_differences_pinned_ends() {
-    let target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(|_| (DVec3::new(0.5, -0.9, 0.2), DVec3::ZERO));
+    let target = BaseMotion::point(DVec3::new(0.5, -0.9, 0.2));
     for (seed, c_q) in [(4, 1.0), (5, 1e-3)] {
         let mut m = loaded_rope(RopeEnd::Pinned(target.clone()), false);
         let err = check_tangent(&mut m, seed, c_q);
@@ -153,7 +153,7 @@ fn rotation_spring_forces_are_the_energy_gradient() {
     let n = m.chain.len();
     let mut rng = Lcg(21);
     for s in 0..n {
-        m.chain.joints[s].rest = 0.2 * rng.next();
+        m.chain.joint_mut(s).expect("sub-joint").rest = 0.2 * rng.next();
     }
     let q: Vec<f64> = (0..n).map(|_| 0.4 * rng.next()).collect();
     let zero = vec![0.0; n];
@@ -199,20 +199,13 @@ fn small_angle_sin_cos_is_exact_to_round_off() {
 #[test]
 fn fused_and_separate_solves_agree() {
     let mut m = loaded_rope(payload(), true);
-    m.chain.rotation_springs = {
+    *m.chain.rotation_springs_mut() = {
         let mut b = RopeBuilder::new(1.2, 5, soft_section(), 0.05).tension_only(false).path(bent_path()).build().unwrap();
-        std::mem::take(&mut b.chain.rotation_springs)
+        std::mem::take(b.chain.rotation_springs_mut())
     };
     let link = m.layout.dof(2, 2);
     let p = m.chain.link_point(link, DVec3::ZERO);
-    m.chain.anchors.push(AnchorSpring {
-        link,
-        local_point: DVec3::ZERO,
-        target: Arc::new(move |_| (p, DVec3::ZERO)),
-        stiffness: 500.0,
-        damping: 5.0,
-        rotation: None,
-    });
+    m.chain.anchors_mut().push(AnchorSpring { link, local_point: DVec3::ZERO, target: BaseMotion::point(p), stiffness: 500.0, damping: 5.0, rotation: None });
     let n = m.chain.len();
     let mut rng = Lcg(33);
     let q: Vec<f64> = m.q0.iter().map(|x| x + 0.02 * rng.next()).collect();
@@ -238,12 +231,8 @@ fn fused_and_separate_solves_agree() {
 #[test]
 fn link_update_agrees_with_the_sum_to_first_order() {
     let end = bent_path().last().copied().unwrap();
-    let mut model = RopeBuilder::new(1.8, 12, soft_section(), 0.02)
-        .tension_only(false)
-        .path(bent_path())
-        .end(RopeEnd::Pinned(Arc::new(move |_| (end, DVec3::ZERO))))
-        .build()
-        .unwrap();
+    let mut model =
+        RopeBuilder::new(1.8, 12, soft_section(), 0.02).tension_only(false).path(bent_path()).end(RopeEnd::Pinned(BaseMotion::point(end))).build().unwrap();
     let n = model.chain.len();
     let mut rng = Lcg(7);
     let q: Vec<f64> = model.q0.iter().map(|x| x + 0.02 * rng.next()).collect();
@@ -310,7 +299,7 @@ fn tangent_matches_finite_differences_on_a_tree() {
             m.chain.residual_into(0.0, &m.q0, &z, &z, &mut r).unwrap();
             m.body_state(&body).0
         };
-        let pin: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync> = Arc::new(move |_| (apex + DVec3::new(0.8, 0.7, -0.1), DVec3::ZERO));
+        let pin = BaseMotion::point(apex + DVec3::new(0.8, 0.7, -0.1));
         let base = BaseMotion::Fixed(BaseState::fixed(DMat3::from_rotation_y(0.4), apex));
         let leg = RopeBuilder::new(1.1, 4, soft_section(), 0.05)
             .tension_only(false)
@@ -323,7 +312,7 @@ fn tangent_matches_finite_differences_on_a_tree() {
             .unwrap();
         m.graft(leg, &body, true).unwrap();
         m.graft(tail(base), &body, false).unwrap();
-        m.chain.rotation_springs.clear();
+        m.chain.rotation_springs_mut().clear();
         assert_eq!(m.chain.limbs().len(), 2);
         let err = check_tangent(&mut m, seed, c_q);
         eprintln!("tree c_q={c_q}: {err:e}");
@@ -408,7 +397,7 @@ fn force_element_tangents_match_finite_differences() {
     let mut rng = Lcg(41);
     let mut m = loaded_rope(payload(), true);
     for link in [m.layout.element_link(1), m.layout.element_link(4)] {
-        m.chain.forces.push(AttachedForce { link, local_point: DVec3::new(0.07, 0.03, -0.02), element: Arc::new(anisotropic_element(&mut rng)) });
+        m.chain.forces_mut().push(AttachedForce { link, local_point: DVec3::new(0.07, 0.03, -0.02), element: Arc::new(anisotropic_element(&mut rng)) });
     }
     for (seed, c_q) in [(11, 1.0), (12, 1e-3)] {
         let err = check_tangent(&mut m, seed, c_q);

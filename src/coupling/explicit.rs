@@ -4,13 +4,12 @@
 //! the body; and the drive of a trolley absorbed into a cable's chain.
 //! Used by the coupling core.
 
-use crate::cable::chain::{rotation_vector, BaseMotion, BaseState};
+use crate::cable::chain::{rotation_vector, BaseMotion, SampledMotion};
 use crate::cable::Cable;
 use glam::{DMat3, DVec3};
-use std::sync::{Arc, Mutex};
 
 /// Pose and motion of a body's attachment point at the start of a step,
-/// shared with the cable's base motion or end-spring target ([`follow`]).
+/// copied into the cable's base motion or end-spring target ([`follow`]).
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct BodySample {
     /// Time of the sample, s.
@@ -28,6 +27,19 @@ pub(crate) struct BodySample {
 }
 
 impl BodySample {
+    /// The sample as the chain's data, fed by follower `source`.
+    pub fn motion(&self, source: usize) -> SampledMotion {
+        SampledMotion {
+            source,
+            t0: self.t0,
+            rotation: self.rotation,
+            position: self.position,
+            velocity: self.velocity,
+            angular_velocity: self.angular_velocity,
+            acceleration: self.acceleration,
+        }
+    }
+
     /// Replaces this sample by `new`, taken `since` seconds after it
     /// (`None`: the first sample, kept as given). The acceleration is the
     /// velocity change over `since`. With `from_poses`, the velocities are
@@ -47,21 +59,11 @@ impl BodySample {
     }
 }
 
-/// A base motion (or anchor target) that follows a shared sample,
-/// extrapolated with constant acceleration from its time.
-pub(crate) fn follow(sample: Arc<Mutex<BodySample>>) -> BaseMotion {
-    BaseMotion::Prescribed(Arc::new(move |t| {
-        let s = *sample.lock().unwrap_or_else(|e| e.into_inner());
-        let dt = t - s.t0;
-        BaseState {
-            rotation: s.rotation,
-            position: s.position + s.velocity * dt + 0.5 * s.acceleration * dt * dt,
-            angular_velocity: s.angular_velocity,
-            velocity: s.velocity + s.acceleration * dt,
-            angular_acceleration: DVec3::ZERO,
-            acceleration: s.acceleration,
-        }
-    }))
+/// A base motion (or anchor target) that follows `sample`, extrapolated
+/// with constant acceleration from its time; `source` is the follower id
+/// that refreshes it each step ([`crate::cable::Chain::set_sampled`]).
+pub(crate) fn follow(sample: &BodySample, source: usize) -> BaseMotion {
+    BaseMotion::Sampled(sample.motion(source))
 }
 
 /// Force (N) and moment about `com` (world point, N·m) that a cable puts on
@@ -74,12 +76,13 @@ pub(crate) fn reaction(cable: &Cable, start: bool, com: DVec3, t: f64) -> (DVec3
         let fc = ch.base_load();
         (fc.bot, fc.top - (com - ch.origin).cross(fc.bot))
     } else {
-        let Some(an) = ch.anchors.first() else {
+        let Some(an) = ch.anchors().first() else {
             return (DVec3::ZERO, DVec3::ZERO);
         };
         let p = ch.link_point(an.link, an.local_point);
         let pv = ch.link_point_velocity(an.link, an.local_point);
-        let (target, target_v) = (an.target)(t);
+        let target = an.target.at(t);
+        let (target, target_v) = (target.position, target.velocity);
         let on_chain = -(p - target) * an.stiffness - (pv - target_v) * an.damping;
         (-on_chain, (target - com).cross(-on_chain))
     }
@@ -95,13 +98,16 @@ pub(crate) fn reaction(cable: &Cable, start: bool, com: DVec3, t: f64) -> (DVec3
 pub(crate) fn rail_drive(cable: &mut Cable, k: f64, c: f64, offset: f64, target_x: f64, target_v: f64, max_force: f64) {
     let (x, v) = (offset + cable.state.q[0], cable.state.v[0]);
     let ch = &mut cable.model.chain;
-    let j = &mut ch.joints[0];
+    let Some(j) = ch.joint_mut_same_layout(0) else {
+        return;
+    };
     let needed = k * (target_x - x) + c * (target_v - v);
-    if needed.abs() <= max_force {
+    let force = if needed.abs() <= max_force {
         (j.stiffness, j.damping, j.rest) = (k, c, target_x - offset);
-        ch.joint_forces[0] = c * target_v;
+        c * target_v
     } else {
         (j.stiffness, j.damping, j.rest) = (0.0, 0.0, 0.0);
-        ch.joint_forces[0] = max_force.copysign(needed);
-    }
+        max_force.copysign(needed)
+    };
+    let _ = ch.set_joint_force(0, force);
 }

@@ -86,7 +86,8 @@ use crate::integrate::Scheme;
 use glam::{DMat3, DQuat, DVec3};
 use rapier3d::prelude as rp;
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Where a cable end is held, in rapier's terms.
@@ -306,7 +307,11 @@ pub struct Follower {
     pub start: bool,
     /// A dynamic body that gets the cable's reaction.
     pub dynamic: bool,
-    sample: Arc<Mutex<BodySample>>,
+    sample: BodySample,
+    /// Id of the [`BaseMotion::Sampled`] this follower refreshes (unique in
+    /// the process, so a cable's followers stay distinct when its island is
+    /// assembled from several drafts).
+    source: usize,
     /// Time of the last sample, s.
     sampled: Option<f64>,
     /// Force (N) and moment about the centre of mass (N·m) of the cable on
@@ -358,7 +363,7 @@ impl CoupledCable {
     /// Marks the cable's constant loads (those on the chain now): the
     /// per-step loads of the carried bodies are added after them.
     pub fn keep_loads(&mut self) {
-        self.fixed_loads = self.cable.model.chain.loads.len();
+        self.fixed_loads = self.cable.model.chain.loads().len();
     }
 }
 
@@ -568,8 +573,6 @@ fn at_anchor(s: BaseState, anchor: DVec3) -> BaseState {
     }
 }
 
-type Target = Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>;
-
 /// A start held by a base: clamped (tangent held) or pinned.
 fn held_start(b: BaseMotion, clamp: bool) -> RopeStart {
     if clamp {
@@ -580,19 +583,12 @@ fn held_start(b: BaseMotion, clamp: bool) -> RopeStart {
 }
 
 /// An end held by an anchor spring to a target: clamped or pinned.
-fn held_end(t: Target, clamp: bool) -> RopeEnd {
+fn held_end(t: BaseMotion, clamp: bool) -> RopeEnd {
     if clamp {
         RopeEnd::Clamped(t)
     } else {
         RopeEnd::Pinned(t)
     }
-}
-
-fn target_of(m: BaseMotion) -> Target {
-    Arc::new(move |t| {
-        let s = m.at(t);
-        (s.position, s.velocity)
-    })
 }
 
 /// The cables and their couplings (see the module docs).
@@ -768,9 +764,11 @@ fn base_motion(
         let (p, r) = pose_of(rb);
         return BaseMotion::Fixed(BaseState::fixed(r, p + r * anchor));
     }
-    let shared = Arc::new(Mutex::new(sample_body(rb, anchor)));
-    followers.push(Follower { body, anchor, start, dynamic: rb.is_dynamic(), sample: shared.clone(), sampled: None, reaction: (DVec3::ZERO, DVec3::ZERO) });
-    follow(shared)
+    static NEXT_SOURCE: AtomicUsize = AtomicUsize::new(0);
+    let source = NEXT_SOURCE.fetch_add(1, Ordering::Relaxed);
+    let sample = sample_body(rb, anchor);
+    followers.push(Follower { body, anchor, start, dynamic: rb.is_dynamic(), sample, source, sampled: None, reaction: (DVec3::ZERO, DVec3::ZERO) });
+    follow(&sample, source)
 }
 
 /// A rope end held by an anchor spring to a world point or to a body that
@@ -784,10 +782,7 @@ fn held_far_end(
 ) -> Result<(RopeEnd, Option<DVec3>), CouplingError> {
     Ok(match attach {
         Attach::Free => (RopeEnd::Free, None),
-        Attach::World { point, clamp } => {
-            let t: Target = Arc::new(move |_| (point, DVec3::ZERO));
-            (held_end(t, clamp), Some(point))
-        }
+        Attach::World { point, clamp } => (held_end(BaseMotion::point(point), clamp), Some(point)),
         Attach::Body { body, anchor, clamp } => {
             let rb = &bodies[body];
             let (p, r) = pose_of(rb);
@@ -802,7 +797,7 @@ fn held_far_end(
             if clamp && moving && !rb.is_dynamic() {
                 return Err(CouplingError::ClampedMovingEnd { why: "a kinematic body that may turn" });
             }
-            let t = target_of(base_motion(body, anchor, false, rb, motions, followers));
+            let t = base_motion(body, anchor, false, rb, motions, followers);
             (held_end(t, clamp), Some(p + r * anchor))
         }
     })
@@ -925,7 +920,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
                 place = model.layout.end_body.expect("end body built");
             }
             let lb = spec.exact[k].unwrap_or_else(|| lumped_of(&bodies[body]));
-            let link_damping = model.chain.joints[place.link].link.map_or((0.0, 0.0), |l| (l.linear_damping, l.angular_damping));
+            let link_damping = model.chain.joints()[place.link].link.map_or((0.0, 0.0), |l| (l.linear_damping, l.angular_damping));
             let rb = &bodies[body];
             CarriedLink {
                 body,
@@ -941,7 +936,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         })
         .collect();
     let cable = Cable::new(model, spec.scheme.clone()).map_err(|e| CouplingError::Cable(Box::new(e)))?;
-    let fixed_loads = cable.model.chain.loads.len();
+    let fixed_loads = cable.model.chain.loads().len();
     Ok(CoupledCable { cable, roles, parts, carried, followers, fixed_loads, failed: false })
 }
 
@@ -973,7 +968,8 @@ pub fn step_cables(
             s.t0 = t;
             let since = f.sampled.map(|t0| t - t0).filter(|d| *d > 0.0);
             // A dynamic body's velocity from its pose change (see BodySample::update).
-            f.sample.lock().unwrap_or_else(|e| e.into_inner()).update(s, since, rb.is_dynamic());
+            f.sample.update(s, since, rb.is_dynamic());
+            cc.cable.model.chain.set_sampled(f.sample.motion(f.source));
             f.sampled = Some(t);
             f.reaction = (DVec3::ZERO, DVec3::ZERO);
         }
@@ -983,7 +979,7 @@ pub fn step_cables(
     let mut failures = Vec::new();
     for (ci, cc) in cables.iter_mut().enumerate().filter(|(_, c)| !c.failed) {
         let t = cc.cable.time();
-        cc.cable.model.chain.loads.truncate(cc.fixed_loads);
+        cc.cable.model.chain.loads_mut().truncate(cc.fixed_loads);
         // Rapier may have re-read the user's joint motor and body settings.
         if let Some((_, Role::Trolley { joint, .. })) = cc.roles[0] {
             mute_motor(joints, joint);
@@ -1013,13 +1009,13 @@ pub fn step_cables(
             let local_point = c.place.origin + c.place.rotation * c.com;
             let (link, mass) = (c.place.link, c.mass);
             let (ld, ad) = c.link_damping;
-            if let Some(lm) = cc.cable.model.chain.joints[link].link.as_mut() {
+            if let Some(lm) = cc.cable.model.chain.joint_mut_same_layout(link).and_then(|j| j.link.as_mut()) {
                 let share = mass / lm.mass;
                 lm.linear_damping = ld + input.linear_damping * share;
                 lm.angular_damping = ad + input.angular_damping * share;
             }
             if force != DVec3::ZERO || moment != DVec3::ZERO {
-                cc.cable.model.chain.loads.push(LinkLoad { link, force, local_point, moment });
+                cc.cable.model.chain.loads_mut().push(LinkLoad { link, force, local_point, moment });
             }
         }
         let fail = |cc: &mut CoupledCable, time: f64, e: CableError| {

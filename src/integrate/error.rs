@@ -114,6 +114,18 @@ pub enum IntegrateError {
         /// The vector's length.
         got: usize,
     },
+    /// An index into the state's coordinates past their end.
+    #[error("at t = {t} s: {what} {index} is past the state's {len} coordinates")]
+    IndexOutOfRange {
+        /// Time of the state, s.
+        t: f64,
+        /// What the index is (an insertion point, a range end).
+        what: &'static str,
+        /// The index.
+        index: usize,
+        /// Number of coordinates.
+        len: usize,
+    },
     /// The scheme's parameters are out of range.
     #[error("invalid scheme at t = {t} s: {source}")]
     InvalidScheme {

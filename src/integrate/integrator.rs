@@ -241,6 +241,16 @@ impl Integrator {
         }
     }
 
+    /// Forgets what the integrator kept from earlier steps (the predictor's
+    /// previous acceleration, the sub-step split, the last step's backup).
+    /// Call it after the system's coordinates changed in number or meaning
+    /// ([`State::insert`], [`State::remove`]).
+    pub fn reset_history(&mut self) {
+        self.ws = Workspace::default();
+        self.split = 1;
+        self.calm = 0;
+    }
+
     /// Puts `state` back where it was at the start of the last
     /// [`step`](Self::step) call (time included): for a caller that rejects
     /// a step the integrator accepted (a cable whose element stretched past

@@ -67,6 +67,44 @@ impl State {
         Ok(())
     }
 
+    /// Inserts coordinates `q` (m or rad) with velocities `v` before index
+    /// `at`, with zero acceleration, to match a system that grew there (a
+    /// chain's [`insert_joints`](crate::cable::Chain::insert_joints)). Then
+    /// recompute the acceleration ([`State::recompute_acceleration`]) and
+    /// reset the integrator's history
+    /// ([`Integrator::reset_history`](crate::integrate::Integrator::reset_history)).
+    /// Refused when `at` is past the end or `q` and `v` differ in length.
+    pub fn insert(&mut self, at: usize, q: &[f64], v: &[f64]) -> Result<(), IntegrateError> {
+        let n = self.q.len();
+        if at > n {
+            return Err(IntegrateError::IndexOutOfRange { t: self.t, what: "insertion point", index: at, len: n });
+        }
+        if q.len() != v.len() {
+            return Err(IntegrateError::DimensionMismatch { t: self.t, what: "inserted velocities", expected: q.len(), got: v.len() });
+        }
+        let zeros = std::iter::repeat_n(0.0, q.len());
+        self.q.splice(at..at, q.iter().copied());
+        self.v.splice(at..at, v.iter().copied());
+        self.a.splice(at..at, zeros.clone());
+        self.a_hat.splice(at..at, zeros);
+        Ok(())
+    }
+
+    /// Removes the coordinates `range`, to match a system that shrank there
+    /// (a chain's [`remove_joints`](crate::cable::Chain::remove_joints));
+    /// then recompute the acceleration and reset the integrator's history
+    /// as for [`State::insert`]. Refused when the range is past the end.
+    pub fn remove(&mut self, range: std::ops::Range<usize>) -> Result<(), IntegrateError> {
+        let n = self.q.len();
+        if range.start > range.end || range.end > n {
+            return Err(IntegrateError::IndexOutOfRange { t: self.t, what: "removal range end", index: range.end, len: n });
+        }
+        for x in [&mut self.q, &mut self.v, &mut self.a, &mut self.a_hat] {
+            x.drain(range.clone());
+        }
+        Ok(())
+    }
+
     /// True when every entry of `q`, `v`, `a` and `a_hat` is finite.
     pub fn is_finite(&self) -> bool {
         [&self.q, &self.v, &self.a, &self.a_hat].iter().all(|x| x.iter().all(|y| y.is_finite()))

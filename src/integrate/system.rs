@@ -21,6 +21,10 @@ pub enum SystemError {
         /// Index of the first non-finite coordinate.
         index: usize,
     },
+    /// The system's description does not fit together (an index past its
+    /// end); the message names what.
+    #[error("invalid model: {0}")]
+    Model(String),
 }
 
 /// A second-order system `M(q) q̈ = Q(t, q, q̇)` in residual form.

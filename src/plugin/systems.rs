@@ -161,7 +161,7 @@ fn rail_motor(cc: &mut CoupledCable, motor: Option<JointMotor>, offset: f64) {
         return;
     };
     let scale = match m.model {
-        MotorModel::AccelerationBased => cable.model.chain.joints[0].link.map_or(0.0, |l| l.mass),
+        MotorModel::AccelerationBased => cable.model.chain.joints()[0].link.map_or(0.0, |l| l.mass),
         MotorModel::ForceBased => 1.0,
     };
     let (k, c) = (m.stiffness as f64 * scale, m.damping as f64 * scale);

@@ -542,7 +542,7 @@ impl World {
                 match &n.slide {
                     Some((_, Some(Drive::Force { force }))) => {
                         // Drive force at the sub-step's midpoint.
-                        cc.cable.model.chain.joint_forces[0] = force.value_at(t + 0.5 * h);
+                        let _ = cc.cable.model.chain.set_joint_force(0, force.value_at(t + 0.5 * h));
                     }
                     Some((_, Some(Drive::Velocity { velocity, max_force }))) => {
                         velocity_motor(&mut cc.cable, velocity.value_at(t + h), *max_force, h);
@@ -668,8 +668,8 @@ impl World {
                     (Some(c), _) => {
                         // The drive force along the rail (the motor's damper included).
                         let ch = &c.cable.model.chain;
-                        let axis = ch.link_rotation(0) * ch.joints[0].axis;
-                        Probe::Vector(axis * (ch.joint_forces[0] - ch.joints[0].damping * c.cable.state.v[0]))
+                        let axis = ch.link_rotation(0) * ch.joints()[0].axis;
+                        Probe::Vector(axis * (ch.joint_forces()[0] - ch.joints()[0].damping * c.cable.state.v[0]))
                     }
                     (None, q) => match self.rapier.joints.iter().find(|j| j.name == *name) {
                         // Rapier joint: revolute in degrees, prismatic in m.
@@ -708,7 +708,7 @@ impl World {
 /// would need exceeds the limit. Sets the sub-joint's damping and drive
 /// force for the coming step.
 fn velocity_motor(cable: &mut Cable, target: f64, max_force: f64, h: f64) {
-    let total_mass: f64 = cable.model.chain.joints.iter().filter_map(|j| j.link.map(|m| m.mass)).sum();
+    let total_mass: f64 = cable.model.chain.joints().iter().filter_map(|j| j.link.map(|m| m.mass)).sum();
     rail_drive(cable, 0.0, total_mass / (2.0 * h), 0.0, 0.0, target, max_force);
 }
 

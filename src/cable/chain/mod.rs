@@ -29,6 +29,7 @@ pub(crate) use sweep::*;
 
 use super::force::{AttachedForce, ForceElement};
 use super::spatial::{M6, V6};
+use crate::integrate::SystemError;
 use glam::{DMat3, DVec3};
 
 /// The exact inputs of the link-slot layout: sub-joint count, the links of
@@ -43,11 +44,45 @@ struct SlotKey {
     limbs: Vec<Limb>,
 }
 
+/// A chain change or description that does not fit together: an index past
+/// the chain's end, or a topology change that would cut through something
+/// (a load, an anchor, a rotation spring, a limb).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ChainError {
+    /// `what` refers to sub-joint `index`, which the chain does not have.
+    #[error("{what} refers to sub-joint {index}, but the chain has {len} sub-joints")]
+    Index {
+        /// What holds the index (e.g. "load 2", "anchor 0").
+        what: String,
+        /// The sub-joint index it names.
+        index: usize,
+        /// Number of sub-joints of the chain.
+        len: usize,
+    },
+    /// A topology change was refused; the reason names what it would cut.
+    #[error("{0}")]
+    Topology(String),
+}
+
+impl From<ChainError> for SystemError {
+    fn from(e: ChainError) -> Self {
+        SystemError::Model(e.to_string())
+    }
+}
+
 /// A serial chain of one-DOF sub-joints (see the module docs).
+///
+/// The description (sub-joints, loads, anchors, force elements, rotation
+/// springs, joint forces) is reached through accessors: their number only
+/// changes through the chain ([`Chain::insert_joints`],
+/// [`Chain::remove_joints`], [`Chain::add_limb`]), which keeps every
+/// per-sub-joint array and every index in step; their contents may be
+/// edited, and every index in them is checked at the next evaluation (an
+/// error, never a panic). The per-step workspace is private.
 #[derive(Clone)]
 pub struct Chain {
     /// The sub-joints from base to tip.
-    pub joints: Vec<SubJoint>,
+    joints: Vec<SubJoint>,
     /// Base motion.
     pub base: BaseMotion,
     /// Gravity, m/s².
@@ -56,17 +91,17 @@ pub struct Chain {
     /// spatial inertias well scaled far from the world origin), m.
     pub origin: DVec3,
     /// Anchor springs (implicit force elements).
-    pub anchors: Vec<AnchorSpring>,
+    anchors: Vec<AnchorSpring>,
     /// Other implicit force elements (user laws, contact, drag).
-    pub forces: Vec<AttachedForce>,
+    forces: Vec<AttachedForce>,
     /// External loads of fixed direction (explicit in value, their geometric
     /// stiffness implicit).
-    pub loads: Vec<LinkLoad>,
+    loads: Vec<LinkLoad>,
     /// Generalized forces on the sub-joints (drives), N or N·m.
-    pub joint_forces: Vec<f64>,
+    joint_forces: Vec<f64>,
     /// Objective bending–torsion laws replacing the per-angle springs of
     /// their sub-joints.
-    pub rotation_springs: Vec<RotationSpring>,
+    rotation_springs: Vec<RotationSpring>,
     /// Limbs (tree branches), sorted by their first sub-joint; empty for a
     /// serial chain (see [`Limb`], [`Chain::add_limb`]).
     limbs: Vec<Limb>,
@@ -172,7 +207,7 @@ impl Chain {
     /// Assigns link scratch slots to links with mass, loads, anchors or
     /// force elements (called by every residual evaluation; allocation-free
     /// once sized).
-    fn assign_slots(&mut self) {
+    pub(crate) fn assign_slots(&mut self) -> Result<(), ChainError> {
         let n = self.joints.len();
         // The layout only changes with the links that carry loads or
         // anchors and with the rotation springs: skip the rebuild when they
@@ -188,8 +223,9 @@ impl Chain {
             && key.springs.iter().copied().eq(self.rotation_springs.iter().map(|r| r.first))
             && key.limbs == self.limbs;
         if same {
-            return;
+            return Ok(());
         }
+        self.check_indices()?;
         self.slot_key.built = true;
         self.slot_key.n = n;
         let links: Vec<usize> = self.loaded_links().collect();
@@ -270,6 +306,35 @@ impl Chain {
         self.spring_order.clear();
         self.spring_order.extend((0..self.rotation_springs.len() as u32).filter(|&k| self.rotation_springs[k as usize].first + 2 < n));
         self.spring_order.sort_by_key(|&k| self.rotation_springs[k as usize].first);
+        Ok(())
+    }
+
+    /// Every sub-joint index in the description names a sub-joint of the
+    /// chain (a rotation spring its three).
+    fn check_indices(&self) -> Result<(), ChainError> {
+        let len = self.joints.len();
+        let bad = |what: String, index: usize| Err(ChainError::Index { what, index, len });
+        for (k, l) in self.loads.iter().enumerate() {
+            if l.link >= len {
+                return bad(format!("load {k}"), l.link);
+            }
+        }
+        for (k, a) in self.anchors.iter().enumerate() {
+            if a.link >= len {
+                return bad(format!("anchor spring {k}"), a.link);
+            }
+        }
+        for (k, f) in self.forces.iter().enumerate() {
+            if f.link >= len {
+                return bad(format!("force element {k}"), f.link);
+            }
+        }
+        for (k, r) in self.rotation_springs.iter().enumerate() {
+            if r.first + 2 >= len {
+                return bad(format!("rotation spring {k} (sub-joints {}..={})", r.first, r.first + 2), r.first + 2);
+            }
+        }
+        Ok(())
     }
 
     /// Forces the per-link layout (link slots, rotation-spring blocks, the
@@ -289,6 +354,224 @@ impl Chain {
     /// Whether the chain has no sub-joints.
     pub fn is_empty(&self) -> bool {
         self.joints.is_empty()
+    }
+
+    /// The sub-joints from base to tip.
+    pub fn joints(&self) -> &[SubJoint] {
+        &self.joints
+    }
+
+    /// Sub-joint `s`, if the chain has it.
+    pub fn joint(&self, s: usize) -> Option<&SubJoint> {
+        self.joints.get(s)
+    }
+
+    /// Sub-joint `s` to edit, if the chain has it. The layout (link slots,
+    /// rotation-spring blocks, the list of non-smooth laws) is rebuilt at
+    /// the next evaluation, so a changed law or link mass takes effect.
+    pub fn joint_mut(&mut self, s: usize) -> Option<&mut SubJoint> {
+        self.slot_key.built = false;
+        self.joints.get_mut(s)
+    }
+
+    /// Sub-joint `s` to edit without rebuilding the layout: for the
+    /// per-step drives and damping the coupling sets, which change neither a
+    /// law nor whether a link has mass.
+    pub(crate) fn joint_mut_same_layout(&mut self, s: usize) -> Option<&mut SubJoint> {
+        self.joints.get_mut(s)
+    }
+
+    /// The generalized forces (drives) on the sub-joints, one per
+    /// sub-joint, N or N·m.
+    pub fn joint_forces(&self) -> &[f64] {
+        &self.joint_forces
+    }
+
+    /// The generalized force on sub-joint `s` (N or N·m), if the chain has it.
+    pub fn joint_force(&self, s: usize) -> Option<f64> {
+        self.joint_forces.get(s).copied()
+    }
+
+    /// Sets the generalized force (drive) on sub-joint `s`, N or N·m.
+    pub fn set_joint_force(&mut self, s: usize, force: f64) -> Result<(), ChainError> {
+        let len = self.joints.len();
+        let f = self.joint_forces.get_mut(s).ok_or(ChainError::Index { what: "joint force".into(), index: s, len })?;
+        *f = force;
+        Ok(())
+    }
+
+    /// External loads of fixed direction (explicit in value, their geometric
+    /// stiffness implicit).
+    pub fn loads(&self) -> &[LinkLoad] {
+        &self.loads
+    }
+
+    /// The loads, to add, edit or remove; their links are checked at the
+    /// next evaluation ([`ChainError::Index`]).
+    pub fn loads_mut(&mut self) -> &mut Vec<LinkLoad> {
+        &mut self.loads
+    }
+
+    /// Anchor springs (implicit force elements) holding links to the world.
+    pub fn anchors(&self) -> &[AnchorSpring] {
+        &self.anchors
+    }
+
+    /// The anchor springs, to add, edit or remove; links checked at the next
+    /// evaluation.
+    pub fn anchors_mut(&mut self) -> &mut Vec<AnchorSpring> {
+        &mut self.anchors
+    }
+
+    /// Other implicit force elements (user laws, contact, drag).
+    pub fn forces(&self) -> &[AttachedForce] {
+        &self.forces
+    }
+
+    /// The force elements, to add, edit or remove; links checked at the next
+    /// evaluation.
+    pub fn forces_mut(&mut self) -> &mut Vec<AttachedForce> {
+        &mut self.forces
+    }
+
+    /// Objective bending–torsion laws replacing the per-angle springs of
+    /// their three sub-joints.
+    pub fn rotation_springs(&self) -> &[RotationSpring] {
+        &self.rotation_springs
+    }
+
+    /// The rotation springs, to add, edit or remove (keep them sorted by
+    /// their first sub-joint); checked at the next evaluation.
+    pub fn rotation_springs_mut(&mut self) -> &mut Vec<RotationSpring> {
+        &mut self.rotation_springs
+    }
+
+    /// Refreshes every [`BaseMotion::Sampled`] fed by `motion.source` (the
+    /// base, anchor targets) with `motion`; returns how many it replaced.
+    pub fn set_sampled(&mut self, motion: SampledMotion) -> usize {
+        let mut n = 0;
+        let targets = std::iter::once(&mut self.base).chain(self.anchors.iter_mut().map(|a| &mut a.target));
+        for m in targets {
+            if let BaseMotion::Sampled(s) = m {
+                if s.source == motion.source {
+                    *s = motion;
+                    n += 1;
+                }
+            }
+        }
+        n
+    }
+
+    /// Inserts `joints` before sub-joint `at` (`at == len()`: after the
+    /// last). Everything that names a sub-joint at or after `at` (loads,
+    /// anchors, force elements, rotation springs, limbs and their parents,
+    /// joint forces) moves with it; the new sub-joints get no joint force
+    /// and belong to the limb of sub-joint `at` (of the last sub-joint when
+    /// appending). The caller inserts the matching coordinates into the
+    /// state ([`crate::integrate::State::insert`]).
+    ///
+    /// Refused (nothing changes): `at` past the end, or a position inside
+    /// a rotation spring's three sub-joints.
+    pub fn insert_joints(&mut self, at: usize, joints: Vec<SubJoint>) -> Result<(), ChainError> {
+        let len = self.joints.len();
+        if at > len {
+            return Err(ChainError::Index { what: "insertion point".into(), index: at, len });
+        }
+        if let Some((k, r)) = self.rotation_springs.iter().enumerate().find(|(_, r)| r.first < at && at <= r.first + 2) {
+            return Err(ChainError::Topology(format!(
+                "cannot insert before sub-joint {at}: it is inside rotation spring {k} (sub-joints {}..={})",
+                r.first,
+                r.first + 2
+            )));
+        }
+        let k = joints.len();
+        if k == 0 {
+            return Ok(());
+        }
+        let shift = |i: &mut usize| {
+            if *i >= at {
+                *i += k;
+            }
+        };
+        self.loads.iter_mut().for_each(|l| shift(&mut l.link));
+        self.anchors.iter_mut().for_each(|a| shift(&mut a.link));
+        self.forces.iter_mut().for_each(|f| shift(&mut f.link));
+        self.rotation_springs.iter_mut().for_each(|r| shift(&mut r.first));
+        for l in &mut self.limbs {
+            // A limb starting at `at` keeps the new sub-joints as its start.
+            if l.first > at {
+                l.first += k;
+            }
+            if let Some(p) = l.parent.as_mut() {
+                shift(p);
+            }
+        }
+        self.joints.splice(at..at, joints);
+        self.joint_forces.splice(at..at, std::iter::repeat_n(0.0, k));
+        self.branch.clear();
+        self.slot_key.built = false;
+        Ok(())
+    }
+
+    /// Removes the sub-joints `range` and returns them. Everything that
+    /// names a later sub-joint moves with it; the caller removes the
+    /// matching coordinates from the state ([`crate::integrate::State::remove`]).
+    ///
+    /// Refused (nothing changes): a range past the end, or one that holds a
+    /// load, an anchor, a force element, part of a rotation spring, a
+    /// limb's start or a link a limb hangs from (remove or move those
+    /// first).
+    pub fn remove_joints(&mut self, range: std::ops::Range<usize>) -> Result<Vec<SubJoint>, ChainError> {
+        let len = self.joints.len();
+        if range.start > range.end || range.end > len {
+            return Err(ChainError::Index { what: format!("removal range {}..{}", range.start, range.end), index: range.end, len });
+        }
+        let inside = |i: usize| range.contains(&i);
+        let refuse = |what: String| Err(ChainError::Topology(format!("cannot remove sub-joints {}..{}: {what}", range.start, range.end)));
+        if let Some(k) = self.loads.iter().position(|l| inside(l.link)) {
+            return refuse(format!("load {k} is on link {}", self.loads[k].link));
+        }
+        if let Some(k) = self.anchors.iter().position(|a| inside(a.link)) {
+            return refuse(format!("anchor spring {k} holds link {}", self.anchors[k].link));
+        }
+        if let Some(k) = self.forces.iter().position(|f| inside(f.link)) {
+            return refuse(format!("force element {k} acts on link {}", self.forces[k].link));
+        }
+        if let Some(k) = self.rotation_springs.iter().position(|r| (r.first..r.first + 3).any(inside)) {
+            return refuse(format!("rotation spring {k} uses sub-joints {}..={}", self.rotation_springs[k].first, self.rotation_springs[k].first + 2));
+        }
+        if let Some(l) = self.limbs.iter().find(|l| inside(l.first) || l.parent.is_some_and(inside)) {
+            return refuse(format!("the limb starting at sub-joint {} starts or hangs there", l.first));
+        }
+        // No limb (nor the serial part before the first limb) may lose all
+        // its sub-joints: the limbs after it would lose their place.
+        let starts: Vec<usize> = std::iter::once(0).chain(self.limbs.iter().map(|l| l.first)).collect();
+        for (i, &a) in starts.iter().enumerate() {
+            let b = starts.get(i + 1).copied().unwrap_or(len);
+            if a < b && range.start <= a && b <= range.end && !(a == 0 && b == len) {
+                return refuse(format!("the branch of sub-joints {a}..{b} would be empty"));
+            }
+        }
+        let k = range.len();
+        let shift = |i: &mut usize| {
+            if *i >= range.end {
+                *i -= k;
+            }
+        };
+        self.loads.iter_mut().for_each(|l| shift(&mut l.link));
+        self.anchors.iter_mut().for_each(|a| shift(&mut a.link));
+        self.forces.iter_mut().for_each(|f| shift(&mut f.link));
+        self.rotation_springs.iter_mut().for_each(|r| shift(&mut r.first));
+        for l in &mut self.limbs {
+            shift(&mut l.first);
+            if let Some(p) = l.parent.as_mut() {
+                shift(p);
+            }
+        }
+        self.joint_forces.drain(range.clone());
+        self.branch.clear();
+        self.slot_key.built = false;
+        Ok(self.joints.drain(range).collect())
     }
 }
 

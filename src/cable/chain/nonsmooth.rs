@@ -42,8 +42,9 @@ impl SecondOrderSystem for Chain {
         self.position_tolerance
     }
     fn freeze_branches(&mut self, start: &[f64], predicted: &[f64]) {
-        self.assign_slots();
-        if self.nonsmooth.is_empty() {
+        // An invalid description freezes nothing: the next evaluation
+        // reports it.
+        if self.assign_slots().is_err() || self.nonsmooth.is_empty() {
             return;
         }
         self.branch.resize(self.joints.len(), 1);
@@ -224,7 +225,9 @@ impl Chain {
 
     /// Every tension-only law frozen on its taut branch (the linear law).
     fn freeze_taut(&mut self) {
-        self.assign_slots();
+        if self.assign_slots().is_err() {
+            return;
+        }
         self.branch.clear();
         self.branch.resize(self.joints.len(), 1);
         self.frozen = !self.nonsmooth.is_empty();

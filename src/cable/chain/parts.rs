@@ -187,20 +187,69 @@ impl BaseState {
     }
 }
 
-/// How the base frame moves: fixed, or a prescribed function of time.
+/// A motion sampled at time `t0` and extrapolated from there with constant
+/// acceleration, the orientation held: what a coupling gives a rope end
+/// that follows a body another engine moves, refreshed before every step
+/// ([`Chain::set_sampled`](super::Chain::set_sampled)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SampledMotion {
+    /// Who refreshes it (a coupling's follower id); the chain only matches
+    /// it in [`Chain::set_sampled`](super::Chain::set_sampled).
+    pub source: usize,
+    /// Time of the sample, s.
+    pub t0: f64,
+    /// Orientation (held).
+    pub rotation: DMat3,
+    /// Position at `t0`, m.
+    pub position: DVec3,
+    /// Velocity at `t0`, m/s.
+    pub velocity: DVec3,
+    /// Angular velocity (held), rad/s.
+    pub angular_velocity: DVec3,
+    /// Acceleration (held), m/s².
+    pub acceleration: DVec3,
+}
+
+impl SampledMotion {
+    /// The extrapolated state at time `t`, s.
+    pub fn at(&self, t: f64) -> BaseState {
+        let dt = t - self.t0;
+        BaseState {
+            rotation: self.rotation,
+            position: self.position + self.velocity * dt + 0.5 * self.acceleration * dt * dt,
+            angular_velocity: self.angular_velocity,
+            velocity: self.velocity + self.acceleration * dt,
+            angular_acceleration: DVec3::ZERO,
+            acceleration: self.acceleration,
+        }
+    }
+}
+
+/// How a frame moves (a chain's base, an anchor spring's target): fixed,
+/// sampled, or a prescribed function of time. The first two are data:
+/// they clone, compare and print; a cloned chain never shares its motion
+/// with the original.
 #[derive(Clone)]
 pub enum BaseMotion {
     /// At rest.
     Fixed(BaseState),
+    /// Sampled and extrapolated (a body another engine moves).
+    Sampled(SampledMotion),
     /// Prescribed motion `t ↦ state` (kinematic body, moving crane hook…).
     Prescribed(Arc<dyn Fn(f64) -> BaseState + Send + Sync>),
 }
 
 impl BaseMotion {
-    /// The base state at time `t`, s.
+    /// At rest at the world point `p` (m), axes along the world's.
+    pub fn point(p: DVec3) -> Self {
+        BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, p))
+    }
+
+    /// The state at time `t`, s.
     pub fn at(&self, t: f64) -> BaseState {
         match self {
             BaseMotion::Fixed(s) => *s,
+            BaseMotion::Sampled(m) => m.at(t),
             BaseMotion::Prescribed(f) => f(t),
         }
     }
@@ -210,6 +259,7 @@ impl std::fmt::Debug for BaseMotion {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             BaseMotion::Fixed(s) => f.debug_tuple("Fixed").field(s).finish(),
+            BaseMotion::Sampled(m) => f.debug_tuple("Sampled").field(m).finish(),
             BaseMotion::Prescribed(_) => f.write_str("Prescribed(..)"),
         }
     }
@@ -218,14 +268,15 @@ impl std::fmt::Debug for BaseMotion {
 /// A spring–damper holding a point of a link to a (possibly moving) world
 /// point, optionally also holding the link's orientation. Implicit: its
 /// stiffness enters the articulated-body solve.
-#[derive(Clone)]
+#[derive(Debug, Clone)]
 pub struct AnchorSpring {
     /// Sub-joint index whose link is held.
     pub link: usize,
     /// Held point in the link frame, m.
     pub local_point: DVec3,
-    /// Target world point (and its velocity) as a function of time.
-    pub target: Arc<dyn Fn(f64) -> (DVec3, DVec3) + Send + Sync>,
+    /// Target: the world point is the motion's origin (position and
+    /// velocity; its orientation is not used).
+    pub target: BaseMotion,
     /// Translational stiffness, N/m.
     pub stiffness: f64,
     /// Translational damping, N·s/m.
@@ -239,8 +290,8 @@ pub struct AnchorSpring {
 /// world point, and optionally an orientation hold.
 impl ForceElement for AnchorSpring {
     fn wrench(&self, t: f64, at: &PointState) -> PointWrench {
-        let (target, target_v) = (self.target)(t);
-        let mut w = spring_to(at, target, target_v, self.stiffness, self.damping);
+        let target = self.target.at(t);
+        let mut w = spring_to(at, target.position, target.velocity, self.stiffness, self.damping);
         if let Some((rt, kr, cr)) = self.rotation {
             let err = rotation_vector(&(at.rotation * rt.transpose()));
             w.moment = -err * kr - at.angular_velocity * cr;
@@ -251,7 +302,7 @@ impl ForceElement for AnchorSpring {
     }
 
     fn energy(&self, t: f64, at: &PointState) -> f64 {
-        let (target, _) = (self.target)(t);
+        let target = self.target.at(t).position;
         let turn = self.rotation.map_or(0.0, |(rt, kr, _)| 0.5 * kr * rotation_vector(&(at.rotation * rt.transpose())).length_squared());
         0.5 * self.stiffness * at.point.distance_squared(target) + turn
     }

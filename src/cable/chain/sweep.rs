@@ -110,8 +110,8 @@ impl Chain {
     /// accelerations; the d'Alembert and gravity loads of every link with
     /// mass; every sub-joint's elastic force (rotation springs at their
     /// last sub-joint). Loads of other links are cleared.
-    pub(crate) fn kinematics(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64]) {
-        self.assign_slots();
+    pub(crate) fn kinematics(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64]) -> Result<(), ChainError> {
+        self.assign_slots()?;
         let base = self.base.at(t);
         let bp = base.position - self.origin;
         let bw = base.angular_velocity;
@@ -209,6 +209,7 @@ impl Chain {
             prev_rot = rot;
             prev_pos = pos;
         }
+        Ok(())
     }
 
     /// Residual `r = M(q) a − Q(t, q, v)` (see [`SecondOrderSystem`](crate::integrate::SecondOrderSystem)); also
@@ -249,7 +250,7 @@ impl Chain {
                 return Err(SystemError::NonFinite { index: index % q.len().max(1) });
             }
         }
-        self.kinematics(t, q, v, a);
+        self.kinematics(t, q, v, a)?;
         let n = self.joints.len();
         for ld in &self.loads {
             let ps = &self.poses[ld.link];
