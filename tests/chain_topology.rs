@@ -80,7 +80,7 @@ fn a_rope_grown_by_one_element_is_the_longer_rope_bit_for_bit() {
         ib.step(&mut big_chain, &mut b, H).expect("built chain step");
         assert_eq!((&a.q, &a.v), (&b.q, &b.v), "t = {}", a.t);
     }
-    let moved = chain.link_point(chain.len() - 1, DVec3::ZERO).distance(big.chain.link_point(big.chain.len() - 1, DVec3::ZERO));
+    let moved = chain.link_point(chain.len() - 1, DVec3::ZERO).unwrap().distance(big.chain.link_point(big.chain.len() - 1, DVec3::ZERO).unwrap());
     assert!(moved > 0.1, "the payload moved {moved} m in 1 s: the comparison would be empty");
 }
 
@@ -158,6 +158,9 @@ fn a_bad_index_is_an_error_that_names_it_not_a_panic() {
     assert!(matches!(chain.set_joint_force(n, 1.0), Err(ChainError::Index { index, len, .. }) if index == n && len == n));
     assert_eq!(chain.joint_force(n), None);
     assert!(chain.joint(n).is_none() && chain.joint_mut(n).is_none());
+    assert!(chain.link_point(n, DVec3::ZERO).is_none() && chain.link_rotation(n).is_none() && chain.joint_point(n).is_none());
+    assert!(chain.link_point_velocity(n, DVec3::ZERO).is_none() && chain.link_velocity(n).is_none() && chain.joint_point_velocity(n).is_none());
+    assert!(model.element_forces(3, &model.q0, &vec![0.0; n]).is_some() && model.element_forces(4, &model.q0, &vec![0.0; n]).is_none());
 
     let q = model.q0.clone();
     let zeros = vec![0.0; n];
@@ -174,6 +177,8 @@ fn a_bad_index_is_an_error_that_names_it_not_a_panic() {
     let mut cable = Cable::new(model, Scheme::default()).expect("cable");
     let spring = Arc::new(PointSpring { target: DVec3::ZERO, stiffness: 1.0, damping: 0.0 });
     cable.model.chain.forces_mut().push(AttachedForce { link: 40, local_point: DVec3::ZERO, element: spring });
+    assert!(cable.element_forces(4).is_none() && cable.rope(0).expect("main rope").element_forces(4).is_none());
+    assert!(cable.element_forces(3).is_some());
     let before = cable.state.clone();
     let err = cable.step(H).expect_err("a force element past the chain's end");
     assert!(err.to_string().contains("force element 0 refers to sub-joint 40"), "{err}");

@@ -135,7 +135,7 @@ fn trolley_pendulum_coupled_period_and_momentum() {
             let p: f64 = (0..cable.model.chain.len())
                 .map(|s| {
                     let ch = &cable.model.chain;
-                    ch.joints()[s].link.map_or(0.0, |lm| lm.mass * ch.link_point_velocity(s, lm.com).x)
+                    ch.joints()[s].link.map_or(0.0, |lm| lm.mass * ch.link_point_velocity(s, lm.com).unwrap().x)
                 })
                 .sum();
             worst_p = worst_p.max(p.abs());

@@ -33,7 +33,7 @@ fn uniform_side_load_top_tension_by_equilibrium() {
     c.add_distributed_load(|_, _, _| DVec3::new(q, 0.0, 0.0));
     settle(&mut c);
     // The pin reaction is the joint's axial force and shear force together.
-    let f = c.element_forces(0);
+    let f = c.element_forces(0).expect("element");
     let top = (f.tension.powi(2) + f.shear[0].powi(2) + f.shear[1].powi(2)).sqrt();
     let exact = ((q * l).powi(2) + ((m + mu * l) * g).powi(2)).sqrt();
     let tip = c.nodes()[40];

@@ -55,7 +55,7 @@ fn trolley_state(app: &mut App, cable: Entity) -> (f64, f64, f64) {
     let c = &sim.cable;
     // Horizontal momentum of everything in the chain.
     let ch = &c.model.chain;
-    let p: f64 = (0..ch.len()).map(|s| ch.joints()[s].link.map_or(0.0, |lm| lm.mass * ch.link_point_velocity(s, lm.com).x)).sum();
+    let p: f64 = (0..ch.len()).map(|s| ch.joints()[s].link.map_or(0.0, |lm| lm.mass * ch.link_point_velocity(s, lm.com).unwrap().x)).sum();
     (c.state.q[0], c.state.v[0], p)
 }
 

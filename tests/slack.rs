@@ -254,7 +254,7 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
             let sag = -cable.nodes()[n / 2].y;
             // The force the rope pulls its pin with (a stiff rope's end
             // element carries part of it as shear).
-            let f = cable.element_forces(0);
+            let f = cable.element_forces(0).expect("element");
             let t_end = (f.tension.powi(2) + f.shear[0].powi(2) + f.shear[1].powi(2)).sqrt();
             let (es, et) = ((sag - sag_ref) / sag_ref, (t_end - t_ref) / t_ref);
             let s = cable.total_stats;
@@ -277,7 +277,7 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
             let mut q = stat.q0.clone();
             stat.chain.solve_static(0.0, &mut q, 1e-9, 500).unwrap();
             let zero = vec![0.0; q.len()];
-            let fs = stat.element_forces(0, &q, &zero);
+            let fs = stat.element_forces(0, &q, &zero).expect("element");
             let t_static = (fs.tension.powi(2) + fs.shear[0].powi(2) + fs.shear[1].powi(2)).sqrt();
             println!(
                 "   static solve: end force {t_static:.2} N ({:+.1e} from the dynamic run, {:+.1e} from the catenary)",
@@ -368,7 +368,7 @@ fn slack_drop_snaps_taut_at_the_energy_balance_peak() {
             cable.step(h).unwrap_or_else(|e| panic!("h = {h}: {e}"));
             let t = cable.time();
             for i in 0..n {
-                let f = cable.element_forces(i).tension;
+                let f = cable.element_forces(i).expect("element").tension;
                 least = least.min(f);
                 peak = peak.max(f);
             }

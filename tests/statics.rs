@@ -67,7 +67,7 @@ fn load_tip(model: &mut RopeModel, force: DVec3, moment: DVec3, steps: usize) ->
         model.chain.solve_static(0.0, &mut q, 1e-13, 200).unwrap();
     }
     let nodes = model.nodes();
-    let tangent = model.chain.link_rotation(tip).x_axis;
+    let tangent = model.chain.link_rotation(tip).unwrap().x_axis;
     (nodes[nodes.len() - 1], tangent)
 }
 

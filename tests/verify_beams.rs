@@ -102,8 +102,8 @@ fn bend45_internal_forces_match_statics() {
     let tip = nodes[n];
     let (mut worst_f, mut worst_m, mut largest_m): (f64, f64, f64) = (0.0, 0.0, 0.0);
     for (i, &node) in nodes[..n].iter().enumerate() {
-        let e = m.element_forces(i, &q, &v);
-        let r = m.chain.link_rotation(m.layout.element_link(i));
+        let e = m.element_forces(i, &q, &v).expect("element");
+        let r = m.chain.link_rotation(m.layout.element_link(i)).unwrap();
         let f_local = r.transpose() * force;
         let m_local = r.transpose() * (tip - node).cross(force);
         let got_f = DVec3::new(e.tension, e.shear[0], e.shear[1]);

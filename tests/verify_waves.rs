@@ -105,7 +105,7 @@ fn taut_string(n: usize, mode: usize) -> StringRun {
     // (diagonal d, off-diagonal e), so sin(jθ), θ = nπ/N, are exact modes:
     // ω² = (T/ℓ)(2 − 2cos θ)/(d + 2e cos θ). (For α = ½ and I = mℓ²/12 this
     // is the consistent-mass linear FE string.)
-    let tensions: Vec<f64> = (0..n).map(|i| c.element_forces(i).tension).collect();
+    let tensions: Vec<f64> = (0..n).map(|i| c.element_forces(i).expect("element").tension).collect();
     let tension = tensions.iter().sum::<f64>() / n as f64;
     let spread = tensions.iter().map(|x| (x - tension).abs()).fold(0.0, f64::max);
     assert!(spread < 1e-9 * tension, "tension not uniform: {spread}");
@@ -262,7 +262,7 @@ fn hanging_chain(n: usize, l: f64, mode: usize) -> ChainRun {
     let centres: Vec<f64> = (0..n).map(|i| shape((i as f64 + 0.5) * le)).collect();
     let modal = move |c: &Cable| {
         let ch = &c.model.chain;
-        (0..n).map(|i| ch.link_point(lay.element_link(i), DVec3::new(0.5 * le, 0.0, 0.0)).x * centres[i]).sum::<f64>()
+        (0..n).map(|i| ch.link_point(lay.element_link(i), DVec3::new(0.5 * le, 0.0, 0.0)).unwrap().x * centres[i]).sum::<f64>()
     };
     let exact = 0.5 * zero * (g / l).sqrt();
     let period = 2.0 * PI / exact;

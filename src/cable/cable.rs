@@ -1,7 +1,7 @@
 //! [`Cable`]: a rope model with its integrator state, stepped in time, with
 //! the queries users read (node positions, tension, moments, energy).
 
-use super::chain::{LinkLoad, SpringLaw, StaticError};
+use super::chain::{LinkLoad, SpringLaw, StaticError, IN_CHAIN};
 use super::force::{AttachedForce, ForceElement};
 use super::rope::{RopeLayout, RopeModel, ELEMENT_DOFS};
 use super::spatial::V6;
@@ -265,7 +265,8 @@ impl Cable {
 
     /// Internal forces of element joint `i` (between element `i − 1` and
     /// `i`; joint 0 holds the start), see [`RopeModel::element_forces`].
-    pub fn element_forces(&self, i: usize) -> ElementForces {
+    /// `None` past the last element (`i ≥ N`).
+    pub fn element_forces(&self, i: usize) -> Option<ElementForces> {
         self.model.element_forces(i, &self.state.q, &self.state.v)
     }
 
@@ -508,9 +509,9 @@ impl Cable {
         let split = |x: V6| [x.top.x, x.top.y, x.top.z, x.bot.x, x.bot.y, x.bot.z];
         let mut want = Vec::with_capacity(m);
         for tg in targets {
-            let p = ch.link_point(tg.link, tg.point) - ch.origin;
+            let p = ch.link_point(tg.link, tg.point).expect(IN_CHAIN) - ch.origin;
             let target = V6::new(tg.angular, tg.linear - tg.angular.cross(p));
-            want.extend(split(target - ch.link_velocity(tg.link)));
+            want.extend(split(target - ch.link_velocity(tg.link).expect(IN_CHAIN)));
         }
         // Responses u = (M + c K_t)⁻¹ Jᵀ e to unit spatial forces e on each
         // target link (generalized force S_s·e on every sub-joint inboard).
@@ -587,7 +588,7 @@ impl Cable {
         let mid = DVec3::new(0.5 * l.element_length, 0.0, 0.0);
         for i in 0..l.elements {
             let link = l.element_link(i);
-            let (p, v) = (self.model.chain.link_point(link, mid), self.model.chain.link_point_velocity(link, mid));
+            let (p, v) = (self.model.chain.link_point(link, mid).expect(IN_CHAIN), self.model.chain.link_point_velocity(link, mid).expect(IN_CHAIN));
             let force = load(i, p, v) * l.element_length;
             self.model.chain.loads_mut().push(LinkLoad { link, force, local_point: mid, moment: DVec3::ZERO });
         }
@@ -675,9 +676,18 @@ impl RopeView<'_> {
     /// joint between user elements `i − 1` and `i` is the chain's joint of
     /// element `N − i`; at the user's joint 0 (the chain's tip) only the
     /// tension is given: the end spring's pull along the last element.
-    pub fn element_forces(&self, i: usize) -> ElementForces {
+    /// `None` past the last element (`i ≥ N`).
+    pub fn element_forces(&self, i: usize) -> Option<ElementForces> {
         let n = self.layout.elements;
-        let i = i.min(n - 1);
+        if i >= n {
+            return None;
+        }
+        Some(self.element_forces_checked(i))
+    }
+
+    /// [`RopeView::element_forces`] for `i < N`.
+    fn element_forces_checked(&self, i: usize) -> ElementForces {
+        let n = self.layout.elements;
         let l = &self.layout;
         let (q, v) = (&self.cable.state.q, &self.cable.state.v);
         let m = &self.cable.model;
@@ -687,12 +697,12 @@ impl RopeView<'_> {
             let ch = &m.chain;
             let link = l.element_link(n - 1);
             let tension = ch.anchors().iter().filter(|a| a.link == link).fold(0.0, |acc, a| {
-                let p = ch.link_point(a.link, a.local_point);
-                let pv = ch.link_point_velocity(a.link, a.local_point);
+                let p = ch.link_point(a.link, a.local_point).expect(IN_CHAIN);
+                let pv = ch.link_point_velocity(a.link, a.local_point).expect(IN_CHAIN);
                 let target = a.target.at(self.cable.state.t);
                 let (target, target_v) = (target.position, target.velocity);
                 let force = -(p - target) * a.stiffness - (pv - target_v) * a.damping;
-                acc + force.dot(ch.link_rotation(link).x_axis)
+                acc + force.dot(ch.link_rotation(link).expect(IN_CHAIN).x_axis)
             });
             return ElementForces { tension, ..Default::default() };
         }
@@ -706,7 +716,7 @@ impl RopeView<'_> {
         let n = self.layout.elements;
         let (i, f) = locate(&self.layout, s);
         let i = if f > 0.5 { (i + 1).min(n - 1) } else { i };
-        self.element_forces(i).tension
+        self.element_forces_checked(i).tension
     }
 
     /// Current stretched length (polyline through the nodes), m.

@@ -21,7 +21,7 @@
 //! first joint's stiffnesses likewise.
 
 use super::cable::ElementForces;
-use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkLoad, LinkMass, RotationSpring, SpringLaw, SubJoint};
+use super::chain::{AnchorSpring, BaseMotion, BaseState, Chain, JointKind, LinkLoad, LinkMass, RotationSpring, SpringLaw, SubJoint, IN_CHAIN};
 use super::material::RopeSection;
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 use thiserror::Error;
@@ -738,7 +738,9 @@ impl RopeModel {
         let zeros = vec![0.0; n0];
         let mut r = vec![0.0; n0];
         self.chain.residual_into(0.0, &self.q0, &zeros, &zeros, &mut r).map_err(|e| RopeError::InvalidPath(format!("initial state: {e}")))?;
-        let (rl, pl) = (self.chain.link_rotation(at.link), self.chain.link_point(at.link, DVec3::ZERO));
+        let (Some(rl), Some(pl)) = (self.chain.link_rotation(at.link), self.chain.link_point(at.link, DVec3::ZERO)) else {
+            return Err(RopeError::InvalidPath(format!("no link {} to graft onto", at.link)));
+        };
         let RopeModel { chain: oc, layout: ol, q0: oq0, section, diameter, length, .. } = other;
         let mut joints = oc.joints().to_vec();
         // Re-express the first joint frame in the body link's frame.
@@ -776,12 +778,13 @@ impl RopeModel {
     /// moments are the bending–torsion law's moment vector
     /// ([`Chain::joint_moment`]), objective for any rotation. Reads the
     /// kinematics of the last residual evaluation (current after a step).
-    pub fn element_forces(&self, i: usize, q: &[f64], v: &[f64]) -> ElementForces {
-        self.element_forces_in(&self.layout, i, q, v)
+    /// `None` past the last element (`i ≥ N`).
+    pub fn element_forces(&self, i: usize, q: &[f64], v: &[f64]) -> Option<ElementForces> {
+        (i < self.layout.elements).then(|| self.element_forces_in(&self.layout, i, q, v))
     }
 
     /// [`RopeModel::element_forces`] of element joint `i` of the rope laid
-    /// out as `l` in this chain (the main rope or a grafted part).
+    /// out as `l` in this chain (the main rope or a grafted part); `i < N`.
     pub(crate) fn element_forces_in(&self, l: &RopeLayout, i: usize, q: &[f64], v: &[f64]) -> ElementForces {
         if i == 0 && l.free_start {
             return ElementForces::default();
@@ -791,7 +794,7 @@ impl RopeModel {
             let s = l.dof(i, k);
             ch.joints()[s].spring_force(q[s], v[s]).0
         };
-        let m = ch.link_rotation(l.element_link(i)).transpose() * ch.joint_moment(l.dof(i, 0), q, v);
+        let m = ch.link_rotation(l.element_link(i)).expect(IN_CHAIN).transpose() * ch.joint_moment(l.dof(i, 0), q, v);
         ElementForces { tension: f(3), shear: [f(4), f(5)], bending: [m.z, m.y], torsion: m.x }
     }
 
@@ -806,8 +809,9 @@ impl RopeModel {
     /// rope or a grafted part), in the layout's order.
     pub(crate) fn nodes_in(&self, l: &RopeLayout, velocity: bool) -> Vec<DVec3> {
         let ch = &self.chain;
-        let point = |link: usize, local: DVec3| if velocity { ch.link_point_velocity(link, local) } else { ch.link_point(link, local) };
-        let mut out: Vec<DVec3> = (0..l.elements).map(|i| if velocity { ch.joint_point_velocity(l.dof(i, 0)) } else { ch.joint_point(l.dof(i, 0)) }).collect();
+        let point = |link: usize, local: DVec3| if velocity { ch.link_point_velocity(link, local) } else { ch.link_point(link, local) }.expect(IN_CHAIN);
+        let mut out: Vec<DVec3> =
+            (0..l.elements).map(|i| if velocity { ch.joint_point_velocity(l.dof(i, 0)) } else { ch.joint_point(l.dof(i, 0)) }.expect(IN_CHAIN)).collect();
         if l.free_start {
             out[0] = point(l.element_link(0), DVec3::ZERO);
         }
@@ -820,7 +824,12 @@ impl RopeModel {
     /// velocity (rad/s).
     pub fn body_state(&self, b: &BodyInChain) -> (DVec3, DMat3, DVec3, DVec3) {
         let ch = &self.chain;
-        (ch.link_point(b.link, b.origin), ch.link_rotation(b.link) * b.rotation, ch.link_point_velocity(b.link, b.origin), ch.link_velocity(b.link).top)
+        (
+            ch.link_point(b.link, b.origin).expect(IN_CHAIN),
+            ch.link_rotation(b.link).expect(IN_CHAIN) * b.rotation,
+            ch.link_point_velocity(b.link, b.origin).expect(IN_CHAIN),
+            ch.link_velocity(b.link).expect(IN_CHAIN).top,
+        )
     }
 
     /// Axial force of element joint `i` (tension positive), N: `EA/L_e · u +

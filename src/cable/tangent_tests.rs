@@ -204,7 +204,7 @@ fn fused_and_separate_solves_agree() {
         std::mem::take(b.chain.rotation_springs_mut())
     };
     let link = m.layout.dof(2, 2);
-    let p = m.chain.link_point(link, DVec3::ZERO);
+    let p = m.chain.link_point(link, DVec3::ZERO).unwrap();
     m.chain.anchors_mut().push(AnchorSpring { link, local_point: DVec3::ZERO, target: BaseMotion::point(p), stiffness: 500.0, damping: 5.0, rotation: None });
     let n = m.chain.len();
     let mut rng = Lcg(33);

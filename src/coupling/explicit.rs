@@ -4,7 +4,7 @@
 //! the body; and the drive of a trolley absorbed into a cable's chain.
 //! Used by the coupling core.
 
-use crate::cable::chain::{rotation_vector, BaseMotion, SampledMotion};
+use crate::cable::chain::{rotation_vector, BaseMotion, SampledMotion, IN_CHAIN};
 use crate::cable::Cable;
 use glam::{DMat3, DVec3};
 
@@ -79,8 +79,8 @@ pub(crate) fn reaction(cable: &Cable, start: bool, com: DVec3, t: f64) -> (DVec3
         let Some(an) = ch.anchors().first() else {
             return (DVec3::ZERO, DVec3::ZERO);
         };
-        let p = ch.link_point(an.link, an.local_point);
-        let pv = ch.link_point_velocity(an.link, an.local_point);
+        let p = ch.link_point(an.link, an.local_point).expect(IN_CHAIN);
+        let pv = ch.link_point_velocity(an.link, an.local_point).expect(IN_CHAIN);
         let target = an.target.at(t);
         let (target, target_v) = (target.position, target.velocity);
         let on_chain = -(p - target) * an.stiffness - (pv - target_v) * an.damping;

@@ -122,6 +122,7 @@
 //! yet (contact is a later issue).
 
 use super::rapier::RapierWorld;
+use crate::cable::chain::IN_CHAIN;
 use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
 use crate::coupling::{rail_drive, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
 use crate::integrate::{Scheme, SchemeParams, Substeps};
@@ -668,7 +669,7 @@ impl World {
                     (Some(c), _) => {
                         // The drive force along the rail (the motor's damper included).
                         let ch = &c.cable.model.chain;
-                        let axis = ch.link_rotation(0) * ch.joints()[0].axis;
+                        let axis = ch.link_rotation(0).expect(IN_CHAIN) * ch.joints()[0].axis;
                         Probe::Vector(axis * (ch.joint_forces()[0] - ch.joints()[0].damping * c.cable.state.v[0]))
                     }
                     (None, q) => match self.rapier.joints.iter().find(|j| j.name == *name) {

@@ -32,6 +32,10 @@ use super::spatial::{M6, V6};
 use crate::integrate::SystemError;
 use glam::{DMat3, DVec3};
 
+/// Why a query on a link a rope layout names cannot fail: the layout was
+/// built with its chain (crate-internal `expect` message).
+pub(crate) const IN_CHAIN: &str = "a rope layout's links are links of its chain";
+
 /// The exact inputs of the link-slot layout: sub-joint count, the links of
 /// the loads then the anchors (in order), the rotation springs' first
 /// sub-joints.
@@ -632,41 +636,47 @@ impl Chain {
     }
 
     /// World position of a point given in the frame of link `s` (after the
-    /// last kinematics evaluation), m.
-    pub fn link_point(&self, s: usize, local: DVec3) -> DVec3 {
-        let p = &self.poses[s];
-        p.pos + p.rot * local + self.origin
+    /// last kinematics evaluation), m; `None` if the chain has no link `s`.
+    pub fn link_point(&self, s: usize, local: DVec3) -> Option<DVec3> {
+        let p = self.poses.get(s)?;
+        Some(p.pos + p.rot * local + self.origin)
     }
 
-    /// World velocity of a point given in the frame of link `s`, m/s.
-    pub fn link_point_velocity(&self, s: usize, local: DVec3) -> DVec3 {
-        let ps = &self.poses[s];
+    /// World velocity of a point given in the frame of link `s`, m/s;
+    /// `None` if the chain has no link `s`.
+    pub fn link_point_velocity(&self, s: usize, local: DVec3) -> Option<DVec3> {
+        let ps = self.poses.get(s)?;
         let p = ps.pos + ps.rot * local;
-        ps.vel.bot + ps.vel.top.cross(p)
+        Some(ps.vel.bot + ps.vel.top.cross(p))
     }
 
-    /// Orientation of link `s` (after the last kinematics evaluation).
-    pub fn link_rotation(&self, s: usize) -> DMat3 {
-        self.poses[s].rot
+    /// Orientation of link `s` (after the last kinematics evaluation);
+    /// `None` if the chain has no link `s`.
+    pub fn link_rotation(&self, s: usize) -> Option<DMat3> {
+        self.poses.get(s).map(|p| p.rot)
     }
 
-    /// Spatial velocity of link `s` (about the chain origin).
-    pub fn link_velocity(&self, s: usize) -> V6 {
-        self.poses[s].vel
+    /// Spatial velocity of link `s` (about the chain origin); `None` if the
+    /// chain has no link `s`.
+    pub fn link_velocity(&self, s: usize) -> Option<V6> {
+        self.poses.get(s).map(|p| p.vel)
     }
 
-    /// Joint point of sub-joint `s` in the world, m.
-    pub fn joint_point(&self, s: usize) -> DVec3 {
+    /// Joint point of sub-joint `s` in the world, m; `None` if the chain
+    /// has no sub-joint `s`.
+    pub fn joint_point(&self, s: usize) -> Option<DVec3> {
+        let offset = self.joints.get(s)?.offset;
+        self.poses.get(s)?;
         let (rot, pos) = self.parent_pose(s);
-        let offset = self.joints[s].offset;
-        pos + rot * offset + self.origin
+        Some(pos + rot * offset + self.origin)
     }
 
-    /// World velocity of sub-joint `s`'s joint point, m/s.
-    pub fn joint_point_velocity(&self, s: usize) -> DVec3 {
-        let p = self.joint_point(s) - self.origin;
+    /// World velocity of sub-joint `s`'s joint point, m/s; `None` if the
+    /// chain has no sub-joint `s`.
+    pub fn joint_point_velocity(&self, s: usize) -> Option<DVec3> {
+        let p = self.joint_point(s)? - self.origin;
         let vel = self.poses[s].vel;
-        vel.bot + vel.top.cross(p)
+        Some(vel.bot + vel.top.cross(p))
     }
 
     /// Potential energy of the anchor springs and force elements
