@@ -84,6 +84,12 @@ pub enum Scheme {
     /// stretch and bending: `tests/fast_preset.rs`); on a linear system both
     /// are the same θ-step.
     ///
+    /// For taut ropes: a rope that goes slack, a rope pinned at both ends,
+    /// very heavy payloads and large steps need the default scheme (one
+    /// solve cannot move a slack element's branch or correct an end
+    /// anchor's lever error; measured in docs/architecture.md, "Fast
+    /// preset"). Such a step stops with an error naming the element.
+    ///
     /// [`SecondOrderSystem::max_frequency`]: super::SecondOrderSystem::max_frequency
     LinearlyImplicit {
         /// Implicitness weight w (dimensionless), in `[1/2, 1]`.
