@@ -86,12 +86,9 @@ pub(crate) struct Affine {
 /// and the starting iterate ([`SecondOrderSystem::freeze_branches`]); once
 /// it converges, every law whose branch disagrees with the solution changes
 /// branch and Newton goes on, with a fresh iteration budget, up to
-/// [`MAX_BRANCH_UPDATES`] times. If branches then still disagree by more
-/// than [`KINK_BAND`], semi-smooth Newton takes over on a system that
-/// allows it ([`SecondOrderSystem::semismooth_fallback`]: damped laws; the
-/// branches follow every iterate, at most [`SEMISMOOTH_ITERATIONS`]); if
-/// that does not converge either, the step fails as not converged (and
-/// the fallback splits it).
+/// [`MAX_BRANCH_UPDATES`] times. A solution whose branches then still
+/// disagree by more than [`KINK_BAND`] is not accepted: the step fails as
+/// not converged (and the fallback splits it).
 pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     ws: &mut Workspace,
@@ -115,11 +112,7 @@ pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
         while result.is_ok() {
             if updates == MAX_BRANCH_UPDATES {
                 if sys.branch_disagreement(&ws.q, &ws.v) > KINK_BAND {
-                    result = if sys.semismooth_fallback() {
-                        semismooth(sys, ws, map, settings, stats)
-                    } else {
-                        Err(Failure::NotConverged { iterations: settings.max_iterations.max(1) })
-                    };
+                    result = Err(Failure::NotConverged { iterations: settings.max_iterations.max(1) });
                 }
                 break;
             }
@@ -134,45 +127,6 @@ pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
     sys.release_branches();
     result
 }
-
-/// The last resort of a solve whose branches still disagree after
-/// [`MAX_BRANCH_UPDATES`]: semi-smooth Newton, the branches following every
-/// iterate (each iteration first moves every disagreeing law to the branch
-/// of the current iterate, then takes one Newton correction), until an
-/// iterate converges with no branch moved, for at most
-/// [`SEMISMOOTH_ITERATIONS`] iterations. Only a converged solution on
-/// branches that all agree with it is accepted.
-///
-/// Why: a damped rope unloading fast (`u + τ u̇ < 0` on a run of
-/// elements) has an active set that the outer updates fix one element per
-/// update, down the rope; moving every law each iteration fixes them
-/// together (docs/architecture.md, "Slack").
-fn semismooth<S: SecondOrderSystem + ?Sized>(
-    sys: &mut S,
-    ws: &mut Workspace,
-    map: Affine,
-    settings: &NewtonSettings,
-    stats: &mut StepStats,
-) -> Result<(), Failure> {
-    let one = NewtonSettings { max_iterations: 1, ..settings.clone() };
-    for _ in 0..SEMISMOOTH_ITERATIONS {
-        // `iterate` leaves q, v behind x when it stops unconverged.
-        update_coordinates(ws, map.c_q, map.c_v);
-        let moved = sys.update_branches(&ws.q, &ws.v);
-        if moved > 0 {
-            stats.branch_updates += 1;
-        }
-        match iterate(sys, ws, map, &one, false, stats) {
-            Ok(()) if moved == 0 => return Ok(()),
-            Ok(()) | Err(Failure::NotConverged { .. }) => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Err(Failure::NotConverged { iterations: SEMISMOOTH_ITERATIONS })
-}
-
-/// Most iterations of the semi-smooth last resort of one Newton solve.
-pub const SEMISMOOTH_ITERATIONS: usize = 30;
 
 /// Most branch updates of non-smooth laws in one Newton solve.
 pub const MAX_BRANCH_UPDATES: usize = 3;

@@ -120,15 +120,6 @@ pub trait SecondOrderSystem {
     /// Back to the exact laws (end of the Newton solve). Default: nothing.
     fn release_branches(&mut self) {}
 
-    /// Whether a Newton solve whose branches still disagree after its
-    /// branch updates may try semi-smooth Newton (the branches following
-    /// every iterate) before failing. `true` for a system whose non-smooth
-    /// laws are damped, whose kink moves with the velocity (a damped rope
-    /// unloading fast). Default `false`.
-    fn semismooth_fallback(&self) -> bool {
-        false
-    }
-
     /// Applies a Newton correction `dq = scale·dx` of the coordinates at `q`
     /// in the system's own way and writes the new coordinates to `out`, or
     /// returns `false` (leaving `out` alone) to have the plain sum `q + dq`

@@ -85,14 +85,6 @@ impl SecondOrderSystem for Chain {
         }
         self.nonsmooth.iter().map(|&s| self.disagreement(s as usize, q, v)).fold(0.0, f64::max)
     }
-    fn semismooth_fallback(&self) -> bool {
-        // Damped tension-only laws only. Measured: on the undamped
-        // `hanging_chain.toml` (a chain at its kink everywhere) semi-smooth
-        // Newton converges at the frame step to a wrong solution (the tip
-        // drifts 22 m), where the frozen-branch updates and step splitting
-        // give the right one.
-        self.nonsmooth.iter().any(|&s| self.joints[s as usize].damping > 0.0)
-    }
     fn release_branches(&mut self) {
         self.frozen = false;
     }
