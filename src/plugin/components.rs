@@ -1,8 +1,9 @@
 //! Components and messages of the cable plugin.
 
 use crate::cable::{BodyInChain, RopeSection};
-use crate::coupling::CoupledCable;
+use crate::coupling::{BodyMotion, CoupledCable};
 use crate::integrate::Scheme;
+use bevy::math::{DMat3, DQuat, DVec3};
 use bevy::prelude::*;
 
 /// Where a cable end is held.
@@ -67,6 +68,84 @@ pub struct CableDescriptor {
     pub end: CableAnchor,
     /// Time integrator.
     pub scheme: Scheme,
+    /// Constant point loads on the rope, kept for the whole run (explicit:
+    /// [`Cable::add_rope_point_load`](crate::cable::Cable::add_rope_point_load)).
+    pub loads: Vec<CablePointLoad>,
+    /// The initial path is the unstretched shape (no bending or torsion
+    /// stress in it; [`RopeBuilder::stress_free_shape`](crate::cable::RopeBuilder::stress_free_shape)).
+    pub stress_free: bool,
+    /// `Some(n)`: start from the static equilibrium (gravity, loads, held
+    /// ends; bodies rapier keeps held where they are), reached in `n` load
+    /// steps ([`Cable::solve_static`](crate::cable::Cable::solve_static)
+    /// with the tolerance of `cablesim`, [`crate::sim::STATIC_TOLERANCE`]).
+    /// A cable whose static solve fails is not built (a [`CableDiverged`]
+    /// message at time 0). For a cable whose rope is grafted onto another's
+    /// chain (a sling leg), the carrying cable's setting counts.
+    pub static_start: Option<u32>,
+}
+
+/// A constant point load on a cable (world frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CablePointLoad {
+    /// Arc length from the cable's start, m.
+    pub s: f64,
+    /// Force, N.
+    pub force: DVec3,
+    /// Moment, N·m.
+    pub moment: DVec3,
+}
+
+/// Exact (f64) inputs of a cable, replacing the f32 values of its
+/// [`CableDescriptor`] when present: a scenario file's values, so that a
+/// scenario spawned into a Bevy app ([`crate::plugin::scenario`]) gives the
+/// same results as `cablesim`, bit for bit. Games do not need it.
+#[derive(Component, Debug, Clone, Default, PartialEq)]
+pub struct CableExact {
+    /// Initial centreline (world, m), replacing [`CableDescriptor::path`].
+    pub path: Option<Vec<DVec3>>,
+    /// The start's point (world or body frame, m), replacing the
+    /// [`CableAnchor`]'s.
+    pub start: Option<DVec3>,
+    /// The end's point (world or body frame, m).
+    pub end: Option<DVec3>,
+}
+
+/// Exact (f64) data of a rapier body entity that cables hang on,
+/// replacing what the plugin would read from rapier (f32): mass
+/// properties, the pose and velocities at the start, and for a fixed or
+/// kinematic body its prescribed motion in closed form. A scenario spawned
+/// into a Bevy app ([`crate::plugin::scenario`]) carries it on every body.
+#[derive(Component, Clone)]
+pub struct BodyExact {
+    /// Mass, kg.
+    pub mass: f64,
+    /// Rotational inertia about the centre of mass, body frame, kg·m².
+    pub inertia: DMat3,
+    /// Origin (= centre of mass) at t = 0, m.
+    pub position: DVec3,
+    /// Orientation at t = 0.
+    pub rotation: DQuat,
+    /// Velocity at t = 0, m/s.
+    pub linear_velocity: DVec3,
+    /// Angular velocity at t = 0, rad/s.
+    pub angular_velocity: DVec3,
+    /// The motion of a fixed or kinematic body (`t` in s ↦ its frame and
+    /// rates); the cable end on it follows this instead of sampling rapier.
+    pub motion: Option<BodyMotion>,
+}
+
+impl std::fmt::Debug for BodyExact {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BodyExact")
+            .field("mass", &self.mass)
+            .field("inertia", &self.inertia)
+            .field("position", &self.position)
+            .field("rotation", &self.rotation)
+            .field("linear_velocity", &self.linear_velocity)
+            .field("angular_velocity", &self.angular_velocity)
+            .field("motion", &self.motion.as_ref().map(|_| "closed form"))
+            .finish()
+    }
 }
 
 impl CableDescriptor {
@@ -85,6 +164,9 @@ impl CableDescriptor {
             start,
             end,
             scheme: Scheme::default(),
+            loads: Vec::new(),
+            stress_free: false,
+            static_start: None,
         }
     }
 }

@@ -71,9 +71,12 @@
 //!   refused.
 
 mod components;
+pub mod scenario;
 mod systems;
 
-pub use self::components::{CableAnchor, CableDescriptor, CableDiverged, CableRopeOf, CableSim, CableState, CarriedBody};
+pub use self::components::{
+    BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CablePointLoad, CableRopeOf, CableSim, CableState, CarriedBody,
+};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::PhysicsSet;
 
@@ -113,11 +116,18 @@ impl CablePlugin {
 pub struct CableSettings {
     /// Cable sub-steps per fixed step.
     pub substeps: u32,
+    /// The cable step, s, replacing the schedule's `Time` delta when set.
+    /// Bevy keeps time in whole nanoseconds (1/60 s becomes 16 666 667 ns);
+    /// a scenario spawned into the app ([`scenario`]) sets its exact `dt`.
+    pub step: Option<f64>,
+    /// Gravity of the cables, m/s², replacing rapier's (f32)
+    /// `RapierConfiguration::gravity` when set.
+    pub gravity: Option<bevy::math::DVec3>,
 }
 
 impl Plugin for CablePlugin {
     fn build(&self, app: &mut App) {
-        app.insert_resource(CableSettings { substeps: self.substeps.max(1) });
+        app.insert_resource(CableSettings { substeps: self.substeps.max(1), step: None, gravity: None });
         app.register_type::<CableState>().register_type::<CableRopeOf>();
         app.add_message::<CableDiverged>();
         app.configure_sets(FixedUpdate, (CableSystems::Init, CableSystems::Step).chain().after(PhysicsSet::SyncBackend).before(PhysicsSet::StepSimulation));

@@ -2,30 +2,42 @@
 //! thin adapters that map entities to rapier handles and call the coupling
 //! core ([`crate::coupling`]).
 
-use super::components::{CableAnchor, CableDescriptor, CableDiverged, CableRopeOf, CableSim, CableState, CarriedBody};
+use super::components::{BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CableRopeOf, CableSim, CableState, CarriedBody};
 use super::CableSettings;
-use crate::cable::RopeBuilder;
+use crate::cable::{LumpedBody, RopeBuilder};
 use crate::coupling::{self, rail_drive, Attach, BodyInputs, Built, CableSpec, CoupledCable, CouplingError, Role};
+use crate::sim::{STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier3d::rapier::dynamics::{JointMotor, RigidBodyHandle};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use std::collections::HashMap;
+
+/// The order in which the plugin builds and steps cables: spawn order
+/// (entity index, then generation), as `cablesim` takes a file's cables in
+/// file order. (`Entity`'s own `Ord` compares its bit pattern, in which
+/// Bevy 0.19 stores the index inverted: later spawns sort first.)
+pub(crate) fn spawn_order(e: Entity) -> (u32, u32) {
+    (e.index_u32(), e.generation().to_bits())
+}
 
 /// Cable entities the plugin has not built yet.
 type NotBuilt = (Without<CableSim>, Without<CableRopeOf>);
 
 /// Builds cables from new [`CableDescriptor`]s, all new ones of a step
 /// together (so a body at the ends of two new cables is solved with both
-/// as one island, see the module docs).
+/// as one island, see the module docs), in the order `cablesim` does:
+/// build, loads, static start, initial velocities.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn init_cables(
     mut commands: Commands,
-    new: Query<(Entity, &CableDescriptor), NotBuilt>,
+    new: Query<(Entity, &CableDescriptor, Option<&CableExact>), NotBuilt>,
     existing: Query<&CableSim>,
     mut ctx: WriteRapierContext,
     handles: Query<&RapierRigidBodyHandle>,
+    exact_bodies: Query<&BodyExact>,
     config: Query<&RapierConfiguration>,
+    settings: Res<CableSettings>,
     mut diverged: MessageWriter<CableDiverged>,
 ) {
     if new.is_empty() {
@@ -34,23 +46,26 @@ pub(crate) fn init_cables(
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
-    let gravity = config.iter().next().map_or(DVec3::new(0.0, -9.81, 0.0), |c| c.gravity.as_dvec3());
-    let mut new: Vec<(Entity, &CableDescriptor)> = new.iter().collect();
-    new.sort_by_key(|(e, _)| *e);
+    let gravity = settings.gravity.unwrap_or_else(|| config.iter().next().map_or(DVec3::new(0.0, -9.81, 0.0), |c| c.gravity.as_dvec3()));
+    let mut new: Vec<(Entity, &CableDescriptor, Option<&CableExact>)> = new.iter().collect();
+    new.sort_by_key(|(e, _, _)| spawn_order(*e));
     let mut specs = Vec::new();
     let mut owners = Vec::new();
-    for (entity, d) in new {
-        let attach = |a: &CableAnchor, end: &str| -> Result<(Attach, Option<(Entity, RigidBodyHandle)>), String> {
+    // Exact motions of the fixed and kinematic bodies the batch hangs on.
+    let mut motions = HashMap::new();
+    for (entity, d, exact) in new {
+        let attach = |a: &CableAnchor, point: Option<DVec3>, end: &str| -> Result<(Attach, Option<(Entity, RigidBodyHandle)>), String> {
             Ok(match a {
                 CableAnchor::Free => (Attach::Free, None),
-                CableAnchor::World { point, clamp } => (Attach::World { point: point.as_dvec3(), clamp: *clamp }, None),
+                CableAnchor::World { point: p, clamp } => (Attach::World { point: point.unwrap_or(p.as_dvec3()), clamp: *clamp }, None),
                 CableAnchor::Body { entity: be, anchor, clamp } => {
                     let h = handles.get(*be).map_err(|_| format!("{end} body {be} has no rapier rigid body"))?.0;
-                    (Attach::Body { body: h, anchor: anchor.as_dvec3(), clamp: *clamp }, Some((*be, h)))
+                    (Attach::Body { body: h, anchor: point.unwrap_or(anchor.as_dvec3()), clamp: *clamp }, Some((*be, h)))
                 }
             })
         };
-        let ends = attach(&d.start, "start").and_then(|s| Ok((s, attach(&d.end, "end")?)));
+        let points = exact.map_or([None, None], |x| [x.start, x.end]);
+        let ends = attach(&d.start, points[0], "start").and_then(|s| Ok((s, attach(&d.end, points[1], "end")?)));
         let ((start, sb), (end, eb)) = match ends {
             Ok(x) => x,
             Err(message) => {
@@ -59,49 +74,119 @@ pub(crate) fn init_cables(
                 continue;
             }
         };
-        let mut rope = RopeBuilder::new(d.length, d.segments, d.section, d.diameter).damping(d.damping).tension_only(d.tension_only).gravity(gravity);
+        let mut rope = RopeBuilder::new(d.length, d.segments, d.section, d.diameter)
+            .damping(d.damping)
+            .gravity(gravity)
+            .stress_free_shape(d.stress_free)
+            .tension_only(d.tension_only);
         if let Some(ga) = d.shear_stiffness {
             rope = rope.shear_stiffness(ga);
         }
-        let path = d.path.as_ref().map(|p| p.iter().map(|v| v.as_dvec3()).collect());
-        specs.push(CableSpec { rope, path, start, end, scheme: d.scheme.clone(), exact: [None, None] });
-        owners.push((entity, [sb, eb]));
+        let path = exact.and_then(|x| x.path.clone()).or_else(|| d.path.as_ref().map(|p| p.iter().map(|v| v.as_dvec3()).collect()));
+        // Exact mass properties and pose of dynamic end bodies; exact
+        // motions of the others.
+        let lumped = |b: Option<(Entity, RigidBodyHandle)>| {
+            let (be, h) = b?;
+            let x = exact_bodies.get(be).ok()?;
+            if ctx.rigidbody_set.bodies.get(h).is_some_and(|rb| rb.is_dynamic()) {
+                Some(LumpedBody { mass: x.mass, inertia: x.inertia, position: x.position, rotation: DMat3::from_quat(x.rotation), com: DVec3::ZERO })
+            } else {
+                None
+            }
+        };
+        for (be, h) in [sb, eb].into_iter().flatten() {
+            if let Some(m) = exact_bodies.get(be).ok().and_then(|x| x.motion.clone()) {
+                motions.insert(h, m);
+            }
+        }
+        let exact_ends = [lumped(sb), lumped(eb)];
+        specs.push(CableSpec { rope, path, start, end, scheme: d.scheme.clone(), exact: exact_ends });
+        owners.push((entity, [sb, eb], d.loads.clone(), d.static_start));
     }
     let others: Vec<&CoupledCable> = existing.iter().map(|s| &s.coupled).collect();
-    let built = coupling::build_cables(&specs, &others, &mut ctx.rigidbody_set.bodies, &mut ctx.joints.impulse_joints, &HashMap::new());
+    let built = coupling::build_cables(&specs, &others, &mut ctx.rigidbody_set.bodies, &mut ctx.joints.impulse_joints, &motions);
     let bodies = &ctx.rigidbody_set.bodies;
     // Entities of the bodies and cables of the batch, for messages.
-    let entity_of: HashMap<RigidBodyHandle, Entity> = owners.iter().flat_map(|(_, ends)| ends.iter().flatten().map(|(e, h)| (*h, *e))).collect();
-    let batch: Vec<Entity> = owners.iter().map(|(e, _)| *e).collect();
+    let entity_of: HashMap<RigidBodyHandle, Entity> = owners.iter().flat_map(|(_, ends, _, _)| ends.iter().flatten().map(|(e, h)| (*h, *e))).collect();
+    let batch: Vec<Entity> = owners.iter().map(|(e, _, _, _)| *e).collect();
     let message = |e: &CouplingError| refusal(e, &entity_of, &batch);
-    let mut sims: Vec<Option<CableSim>> = Vec::new();
-    let mut ropes = Vec::new();
-    for ((entity, ends), r) in owners.iter().copied().zip(built) {
-        sims.push(None);
-        let mut fail = |message: String| {
-            diverged.write(CableDiverged { entity, time: 0.0, message });
-            commands.entity(entity).remove::<CableDescriptor>();
-        };
-        let mut cc = match r {
-            Ok(Built::Cable(cc)) => *cc,
-            Ok(Built::Part { onto, part }) => {
-                ropes.push((entity, onto, part));
-                continue;
-            }
+    let fail = |commands: &mut Commands, diverged: &mut MessageWriter<CableDiverged>, entity: Entity, message: String| {
+        diverged.write(CableDiverged { entity, time: 0.0, message });
+        commands.entity(entity).remove::<CableDescriptor>();
+    };
+    // 1. Build: the cables with their own chain, and the ropes grafted
+    //    onto another batch member's chain (onto, rope index).
+    let mut sims: Vec<Option<CoupledCable>> = Vec::new();
+    let mut parts: Vec<Option<(usize, usize)>> = Vec::new();
+    for ((entity, _, _, _), r) in owners.iter().zip(built) {
+        let (sim, part) = match r {
+            Ok(Built::Cable(cc)) => (Some(*cc), None),
+            Ok(Built::Part { onto, part }) => (None, Some((onto, part))),
             Err(e) => {
-                fail(message(&e));
-                continue;
+                fail(&mut commands, &mut diverged, *entity, message(&e));
+                (None, None)
             }
         };
-        // The carried bodies' rapier velocities become the chain's initial rates.
-        let velocity = |h: RigidBodyHandle| bodies.get(h).map_or((DVec3::ZERO, DVec3::ZERO), |rb| (rb.linvel().as_dvec3(), rb.angvel().as_dvec3()));
+        sims.push(sim);
+        parts.push(part);
+    }
+    // 2. Loads: each cable's on its own rope, or on its rope in the chain
+    //    it is grafted onto.
+    for (k, (_, _, loads, _)) in owners.iter().enumerate() {
+        let (i, rope) = match (sims[k].is_some(), parts[k]) {
+            (true, _) => (k, 0),
+            (false, Some((onto, part))) => (onto, part),
+            _ => continue,
+        };
+        if let Some(cc) = sims[i].as_mut() {
+            for l in loads {
+                let added = cc.cable.add_rope_point_load(rope, l.s, l.force, l.moment);
+                debug_assert!(added, "the core gave this rope");
+            }
+        }
+    }
+    // 3. Static start and initial velocities of the carried bodies (exact
+    //    when the body has `BodyExact`, else rapier's).
+    let velocity = |h: RigidBodyHandle| {
+        let exact = entity_of.get(&h).and_then(|e| exact_bodies.get(*e).ok());
+        match (exact, bodies.get(h)) {
+            (Some(x), _) => (x.linear_velocity, x.angular_velocity),
+            (None, Some(rb)) => (rb.linvel().as_dvec3(), rb.angvel().as_dvec3()),
+            (None, None) => (DVec3::ZERO, DVec3::ZERO),
+        }
+    };
+    for (k, (entity, _, _, statics)) in owners.iter().enumerate() {
+        let Some(cc) = sims[k].as_mut() else { continue };
+        cc.keep_loads();
+        if let Some(steps) = statics {
+            if let Err(e) = cc.cable.solve_static(*steps as usize, STATIC_TOLERANCE, STATIC_MAX_ITERATIONS) {
+                fail(&mut commands, &mut diverged, *entity, format!("static start: {e}"));
+                sims[k] = None;
+                continue;
+            }
+        }
         if let Err((_, e)) = cc.start_velocities(&velocity) {
-            fail(e.to_string());
+            fail(&mut commands, &mut diverged, *entity, e.to_string());
+            sims[k] = None;
+        }
+    }
+    // 4. Components.
+    let alive: Vec<bool> = sims.iter().map(Option::is_some).collect();
+    for (k, (entity, ends, _, _)) in owners.iter().enumerate() {
+        if let Some((onto, part)) = parts[k] {
+            // A rope grafted onto another entity's chain: that entity must
+            // exist (it fails with its ropes).
+            if !alive[onto] {
+                fail(&mut commands, &mut diverged, *entity, message(&CouplingError::Island { cable: onto }));
+            } else {
+                commands.entity(*entity).insert((CableRopeOf { cable: batch[onto], rope: part }, CableState::default()));
+            }
             continue;
         }
+        let Some(cc) = sims[k].take() else { continue };
         let mut carried = Vec::new();
         let mut rail = None;
-        for (k, (be, h)) in ends.iter().enumerate().filter_map(|(k, e)| e.map(|e| (k, e))) {
+        for (i, (be, h)) in ends.iter().enumerate().filter_map(|(i, e)| e.map(|e| (i, e))) {
             let role = cc.role_of(h).expect("every body end has a role");
             carried.push((
                 be,
@@ -114,28 +199,12 @@ pub(crate) fn init_cables(
                         CarriedBody::Lumped(c.place)
                     }
                     Role::Base => CarriedBody::Base,
-                    Role::Explicit if k == 0 => CarriedBody::Explicit,
+                    Role::Explicit if i == 0 => CarriedBody::Explicit,
                     Role::Explicit => CarriedBody::ExplicitEnd,
                 },
             ));
         }
-        let last = sims.len() - 1;
-        sims[last] = Some(CableSim { coupled: cc, bodies: carried, rail });
-    }
-    // A rope grafted onto another entity's chain: that entity must exist
-    // (it fails with its ropes: initial velocities).
-    for (entity, onto, part) in ropes {
-        if sims[onto].is_none() {
-            diverged.write(CableDiverged { entity, time: 0.0, message: message(&CouplingError::Island { cable: onto }) });
-            commands.entity(entity).remove::<CableDescriptor>();
-            continue;
-        }
-        commands.entity(entity).insert((CableRopeOf { cable: batch[onto], rope: part }, CableState::default()));
-    }
-    for (entity, sim) in batch.into_iter().zip(sims) {
-        if let Some(sim) = sim {
-            commands.entity(entity).insert((sim, CableState::default()));
-        }
+        commands.entity(*entity).insert((CableSim { coupled: cc, bodies: carried, rail }, CableState::default()));
     }
 }
 
@@ -185,7 +254,10 @@ pub(crate) fn step_cables(
     time: Res<Time>,
     mut diverged: MessageWriter<CableDiverged>,
 ) {
-    let dt = time.delta_secs_f64();
+    if time.delta_secs_f64() <= 0.0 {
+        return;
+    }
+    let dt = settings.step.unwrap_or(time.delta_secs_f64());
     if dt <= 0.0 {
         return;
     }
@@ -193,7 +265,7 @@ pub(crate) fn step_cables(
         return;
     };
     let mut list: Vec<(Entity, Mut<CableSim>)> = cables.iter_mut().collect();
-    list.sort_by_key(|(e, _)| *e);
+    list.sort_by_key(|(e, _)| spawn_order(*e));
     let mut given: HashMap<RigidBodyHandle, BodyInputs> = HashMap::new();
     for (_, sim) in &mut list {
         let sim = &mut **sim;
@@ -242,7 +314,7 @@ pub(crate) fn write_bodies(mut cables: Query<(Entity, &mut CableSim)>, mut ctx: 
         return;
     };
     let mut list: Vec<(Entity, Mut<CableSim>)> = cables.iter_mut().collect();
-    list.sort_by_key(|(e, _)| *e);
+    list.sort_by_key(|(e, _)| spawn_order(*e));
     let mut refs: Vec<&mut CoupledCable> = list.iter_mut().map(|(_, s)| &mut s.coupled).collect();
     coupling::after_rapier(&mut refs, &mut ctx.rigidbody_set.bodies, &ctx.simulation.narrow_phase);
 }

@@ -86,6 +86,27 @@ pub(crate) fn collider(shape: &Shape) -> rp::ColliderBuilder {
     }
 }
 
+/// Pose (origin, orientation) of rapier body `h` in f64.
+pub(crate) fn pose_of(bodies: &rp::RigidBodySet, h: rp::RigidBodyHandle) -> (DVec3, DQuat) {
+    let p = bodies[h].position();
+    (p.translation.as_dvec3(), p.rotation.as_dquat().normalize())
+}
+
+/// Velocity of rapier body `h`'s origin (= centre of mass) and its angular
+/// velocity, f64.
+pub(crate) fn velocity_of(bodies: &rp::RigidBodySet, h: rp::RigidBodyHandle) -> (DVec3, DVec3) {
+    let rb = &bodies[h];
+    (rb.linvel().as_dvec3(), rb.angvel().as_dvec3())
+}
+
+/// Kinetic energy (J) of a rigid body of mass `mass` (kg) and body-frame
+/// inertia `inertia` (kg·m²) at orientation `q`, velocity `v` (m/s) and
+/// angular velocity `w` (rad/s, world).
+pub(crate) fn rigid_energy(mass: f64, inertia: &DMat3, q: DQuat, v: DVec3, w: DVec3) -> f64 {
+    let wl = DMat3::from_quat(q).transpose() * w;
+    0.5 * mass * v.length_squared() + 0.5 * wl.dot(*inertia * wl)
+}
+
 impl RapierWorld {
     /// An empty world with `gravity` stepping at `dt`.
     pub fn new(gravity: DVec3, dt: f64) -> RapierWorld {
@@ -136,14 +157,12 @@ impl RapierWorld {
 
     /// Pose (origin, orientation) of a rapier body in f64.
     pub fn pose_of(&self, h: rp::RigidBodyHandle) -> (DVec3, DQuat) {
-        let p = self.pw.bodies[h].position();
-        (p.translation.as_dvec3(), p.rotation.as_dquat().normalize())
+        pose_of(&self.pw.bodies, h)
     }
 
     /// Velocity of the origin (= centre of mass) and angular velocity, f64.
     pub fn velocity_of(&self, h: rp::RigidBodyHandle) -> (DVec3, DVec3) {
-        let rb = &self.pw.bodies[h];
-        (rb.linvel().as_dvec3(), rb.angvel().as_dvec3())
+        velocity_of(&self.pw.bodies, h)
     }
 
     /// Adds a scenario joint between two rapier bodies (`None`: the ground)
@@ -333,9 +352,7 @@ impl RapierWorld {
             .filter(|b| b.kind == BodyKind::Dynamic && !b.carried)
             .map(|b| {
                 let (v, w) = self.velocity_of(b.handle);
-                let r = DMat3::from_quat(self.pose_of(b.handle).1);
-                let wl = r.transpose() * w;
-                0.5 * b.mass * v.length_squared() + 0.5 * wl.dot(b.inertia * wl)
+                rigid_energy(b.mass, &b.inertia, self.pose_of(b.handle).1, v, w)
             })
             .sum()
     }

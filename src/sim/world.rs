@@ -121,13 +121,14 @@
 //! anchors are not the same point at t = 0. Cables do not touch colliders
 //! yet (contact is a later issue).
 
+use super::probe::Probe;
 use super::rapier::RapierWorld;
 use crate::cable::chain::IN_CHAIN;
 use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
 use crate::coupling::{rail_drive, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
 use crate::integrate::{Scheme, SchemeParams, Substeps};
-use crate::scenario::{self, BodyKind, CableEnd, Component, Drive, JointKind, Location, ProbeTarget, Quantity, Scenario, Shape};
-use glam::{DMat3, DQuat, DVec3, EulerRot};
+use crate::scenario::{self, BodyKind, CableEnd, Drive, JointKind, Location, ProbeTarget, Quantity, Scenario, Shape};
+use glam::{DMat3, DVec3};
 use std::collections::HashMap;
 use std::sync::Arc;
 use thiserror::Error;
@@ -292,7 +293,7 @@ pub struct World {
 /// The closed-form motion of a fixed or kinematic scenario body (its
 /// frame; for a `spin`, the angular velocity and acceleration too; the
 /// origin's acceleration by a central difference of the velocity).
-fn body_motion(b: &scenario::Body) -> BodyMotion {
+pub(crate) fn body_motion(b: &scenario::Body) -> BodyMotion {
     let rot = DMat3::from_quat(b.rotation);
     match &b.motion {
         None => {
@@ -595,20 +596,7 @@ impl World {
 
     /// Appends the current value of every probe column (file order) to `out`.
     pub fn sample(&self, out: &mut Vec<f64>) {
-        out.clear();
-        for p in &self.scenario.probes {
-            let value = self.probe(p);
-            match (value, p.component) {
-                (Probe::Scalar(x), _) => out.push(x),
-                (Probe::Vector(v), None) => out.extend([v.x, v.y, v.z]),
-                (Probe::Vector(v), Some(c)) => out.push(match c {
-                    Component::X => v.x,
-                    Component::Y => v.y,
-                    Component::Z => v.z,
-                    Component::Norm => v.length(),
-                }),
-            }
-        }
+        super::probe::sample(&self.scenario.probes, self, out);
     }
 
     fn body_state(&self, name: &str) -> (DVec3, DMat3, DVec3, DVec3) {
@@ -628,69 +616,6 @@ impl World {
         (b.position_at(t), DMat3::from_quat(b.rotation_at(t)), v, w)
     }
 
-    fn probe(&self, p: &scenario::Probe) -> Probe {
-        match &p.target {
-            ProbeTarget::System => {
-                // Cables (with the bodies they carry) + rapier's dynamic bodies.
-                let e = |f: fn(&Cable) -> f64| self.core.cables.iter().map(|c| f(&c.cable)).sum::<f64>();
-                let ke = self.rapier.kinetic_energy();
-                match p.quantity {
-                    Quantity::KineticEnergy => Probe::Scalar(e(Cable::kinetic_energy) + ke),
-                    _ => Probe::Scalar(e(Cable::energy) + ke + self.rapier.gravity_energy(self.scenario.simulation.gravity)),
-                }
-            }
-            ProbeTarget::Body(name) => {
-                let (pos, rot, vel, w) = self.body_state(name);
-                Probe::Vector(match p.quantity {
-                    Quantity::Position => pos,
-                    Quantity::Velocity => vel,
-                    Quantity::Rotation => {
-                        let (x, y, z) = DQuat::from_mat3(&rot).to_euler(EulerRot::XYZ);
-                        DVec3::new(x, y, z) * (180.0 / std::f64::consts::PI)
-                    }
-                    _ => w * (180.0 / std::f64::consts::PI),
-                })
-            }
-            ProbeTarget::Cable(name) => {
-                let c = self.rope(name).expect("probe targets are validated");
-                let s = p.s.unwrap_or(0.0);
-                match p.quantity {
-                    Quantity::Position => Probe::Vector(c.point_at(s).0),
-                    Quantity::Velocity => Probe::Vector(c.point_at(s).1),
-                    Quantity::Tension => Probe::Scalar(c.tension_at(s)),
-                    _ => Probe::Scalar(c.stretched_length()),
-                }
-            }
-            ProbeTarget::Joint(name) => {
-                let c = self.names.iter().position(|n| n.slide.as_ref().is_some_and(|(j, _)| j == name)).map(|i| &self.core.cables[i]);
-                match (c, p.quantity) {
-                    (Some(c), Quantity::Position) => Probe::Scalar(c.cable.state.q[0]),
-                    (Some(c), Quantity::Velocity) => Probe::Scalar(c.cable.state.v[0]),
-                    (Some(c), _) => {
-                        // The drive force along the rail (the motor's damper included).
-                        let ch = &c.cable.model.chain;
-                        let axis = ch.link_rotation(0).expect(IN_CHAIN) * ch.joints()[0].axis;
-                        Probe::Vector(axis * (ch.joint_forces()[0] - ch.joints()[0].damping * c.cable.state.v[0]))
-                    }
-                    (None, q) => match self.rapier.joints.iter().find(|j| j.name == *name) {
-                        // Rapier joint: revolute in degrees, prismatic in m.
-                        Some(j) => {
-                            let deg = if j.kind == JointKind::Revolute { 180.0 / std::f64::consts::PI } else { 1.0 };
-                            match q {
-                                Quantity::Position => Probe::Scalar(self.rapier.joint_position(j) * deg),
-                                Quantity::Velocity => Probe::Scalar(self.rapier.joint_velocity(j) * deg),
-                                // The drive force / torque (non-driven joints are refused).
-                                _ => Probe::Vector(self.rapier.joint_axis(j) * j.drive_force),
-                            }
-                        }
-                        None => Probe::Scalar(f64::NAN),
-                    },
-                }
-            }
-            ProbeTarget::Winch(_) => Probe::Scalar(f64::NAN),
-        }
-    }
-
     /// Names of the cables.
     pub fn cable_names(&self) -> Vec<&str> {
         self.scenario.cables.iter().map(|c| c.name.as_str()).collect()
@@ -699,6 +624,51 @@ impl World {
     /// Newton iterations, residual evaluations and solves of all cables so far.
     pub fn work(&self) -> (usize, usize) {
         self.core.cables.iter().fold((0, 0), |(a, b), c| (a + c.cable.total_stats.newton_iterations, b + c.cable.total_stats.solves))
+    }
+}
+
+impl super::probe::ProbeSource for World {
+    fn chains(&self) -> Vec<&Cable> {
+        self.core.cables.iter().map(|c| &c.cable).collect()
+    }
+
+    fn rapier_energies(&self) -> (f64, f64) {
+        (self.rapier.kinetic_energy(), self.rapier.gravity_energy(self.scenario.simulation.gravity))
+    }
+
+    fn rope(&self, name: &str) -> Option<RopeView<'_>> {
+        World::rope(self, name)
+    }
+
+    fn body_state(&self, name: &str) -> (DVec3, DMat3, DVec3, DVec3) {
+        World::body_state(self, name)
+    }
+
+    fn joint(&self, name: &str, quantity: Quantity) -> Probe {
+        let c = self.names.iter().position(|n| n.slide.as_ref().is_some_and(|(j, _)| j == name)).map(|i| &self.core.cables[i]);
+        match (c, quantity) {
+            (Some(c), Quantity::Position) => Probe::Scalar(c.cable.state.q[0]),
+            (Some(c), Quantity::Velocity) => Probe::Scalar(c.cable.state.v[0]),
+            (Some(c), _) => {
+                // The drive force along the rail (the motor's damper included).
+                let ch = &c.cable.model.chain;
+                let axis = ch.link_rotation(0).expect(IN_CHAIN) * ch.joints()[0].axis;
+                Probe::Vector(axis * (ch.joint_forces()[0] - ch.joints()[0].damping * c.cable.state.v[0]))
+            }
+            (None, q) => match self.rapier.joints.iter().find(|j| j.name == *name) {
+                // Rapier joint: revolute in degrees, prismatic in m.
+                Some(j) => {
+                    let deg = if j.kind == JointKind::Revolute { 180.0 / std::f64::consts::PI } else { 1.0 };
+                    match q {
+                        Quantity::Position => Probe::Scalar(self.rapier.joint_position(j) * deg),
+                        Quantity::Velocity => Probe::Scalar(self.rapier.joint_velocity(j) * deg),
+                        // The drive force / torque (non-driven joints are refused).
+                        _ => Probe::Vector(self.rapier.joint_axis(j) * j.drive_force),
+                    }
+                }
+                None => Probe::Scalar(f64::NAN),
+            },
+        }
     }
 }
 
@@ -711,9 +681,4 @@ impl World {
 fn velocity_motor(cable: &mut Cable, target: f64, max_force: f64, h: f64) {
     let total_mass: f64 = cable.model.chain.joints().iter().filter_map(|j| j.link.map(|m| m.mass)).sum();
     rail_drive(cable, 0.0, total_mass / (2.0 * h), 0.0, 0.0, target, max_force);
-}
-
-enum Probe {
-    Scalar(f64),
-    Vector(DVec3),
 }

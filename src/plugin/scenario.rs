@@ -1,0 +1,310 @@
+//! A scenario file spawned into a Bevy app with the plugin: its bodies
+//! become bevy_rapier entities, its cables [`CableDescriptor`] entities,
+//! and the plugin steps them through the same coupling core as `cablesim`
+//! ([`crate::sim::World`]). The probes are sampled every fixed step into
+//! [`ScenarioRun::rows`] by the same code as `cablesim`'s `results.csv`.
+//!
+//! ```no_run
+//! use bevy::prelude::*;
+//! use bevy::time::TimeUpdateStrategy;
+//! use bevy_rapier3d::prelude::*;
+//! use bevy_rapier_cable::plugin::{scenario, CablePlugin};
+//! let sc = bevy_rapier_cable::scenario::load(std::path::Path::new("assets/scenarios/hanging_payload.toml")).unwrap();
+//! let mut app = App::new();
+//! app.add_plugins((MinimalPlugins, TransformPlugin,
+//!                  RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(),
+//!                  CablePlugin::default()));
+//! app.insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+//! scenario::add_scenario(&mut app, sc).unwrap();
+//! app.finish();
+//! app.cleanup();
+//! for _ in 0..60 {
+//!     app.update();
+//! }
+//! let run = app.world().resource::<scenario::ScenarioRun>();
+//! println!("{} rows, last at t = {} s", run.rows.len(), run.time);
+//! ```
+//!
+//! What makes it the same run as `cablesim` (tested bit for bit on the
+//! shipped scenarios it supports, `tests/plugin_scenarios.rs`):
+//! * the scenario's f64 data reach the core unrounded: cable paths and
+//!   anchor points ([`CableExact`]), body mass properties, poses, initial
+//!   velocities and the closed-form pose of fixed bodies ([`BodyExact`]),
+//!   the step `dt` and gravity ([`CableSettings::step`],
+//!   [`CableSettings::gravity`]); rapier gets the same f32 values as
+//!   `cablesim`'s rapier world (`TimestepMode::Fixed` with `dt` as f32,
+//!   `RapierConfiguration::gravity`);
+//! * the plugin builds, loads, statically solves and starts the cables in
+//!   `cablesim`'s order and steps them with the same core calls.
+//!
+//! **Not yet spawned** (refused with [`SimError::Unsupported`] naming the
+//! item): joints (rapier joints, and the trolley rails whose drives
+//! `cablesim` runs in the chain), kinematic bodies with a `motion`, and
+//! `[simulation] substeps` above 1 (`cablesim` sub-steps cables and rapier
+//! together; the plugin's [`CablePlugin::substeps`](super::CablePlugin)
+//! sub-steps the cables within one rapier step). Everything `cablesim`
+//! refuses is refused here too, with the same message.
+
+use super::components::{BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CablePointLoad, CableRopeOf, CableSim};
+use super::{CableSettings, CableSystems};
+use crate::cable::{BodyInChain, Cable, RopeSection, RopeView};
+use crate::integrate::{Scheme, SchemeParams};
+use crate::scenario::{BodyKind, CableEnd, Location, Quantity, Scenario, Shape};
+use crate::sim::probe::{self, Probe, ProbeSource};
+use crate::sim::rapier::{pose_of, rigid_energy, velocity_of};
+use crate::sim::{body_motion, shape_inertia, SimError, World as SimWorld};
+use bevy::math::{DMat3, DVec3};
+use bevy::prelude::*;
+use bevy_rapier3d::prelude::*;
+use bevy_rapier3d::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
+use std::collections::HashMap;
+use std::time::Duration;
+
+/// A scenario running in the app: what [`add_scenario`] spawned, and the
+/// probe rows sampled after every fixed step.
+#[derive(Resource, Debug)]
+pub struct ScenarioRun {
+    /// The scenario.
+    pub scenario: Scenario,
+    /// Body name → its entity.
+    pub bodies: HashMap<String, Entity>,
+    /// Cable name → its entity, in file order.
+    pub cables: Vec<(String, Entity)>,
+    /// Fixed steps run.
+    pub steps: u64,
+    /// Simulation time after the last step, s (`steps · dt`, as `cablesim`).
+    pub time: f64,
+    /// (time s, every probe column in file order) after every fixed step,
+    /// the columns of `cablesim`'s `results.csv`.
+    pub rows: Vec<(f64, Vec<f64>)>,
+    /// The first failure: (cable entity, time s, message). Sampling stops.
+    pub failed: Option<(Entity, f64, String)>,
+}
+
+/// Spawns `scenario` into `app` (which must have bevy_rapier's plugin in
+/// the fixed schedule and [`CablePlugin`](super::CablePlugin)): sets the
+/// fixed step to the scenario's `dt` (`Time<Fixed>`, rapier's
+/// `TimestepMode::Fixed`, the cables' exact step), rapier's gravity and
+/// the cables', spawns one entity per body and per cable, and inserts
+/// [`ScenarioRun`]. Errors: everything `cablesim` refuses, with its
+/// message, and what is not spawned yet (module docs).
+pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
+    let file = scenario.file.display().to_string();
+    let unsupported = |location: Location, what: String| SimError::Unsupported { file: file.clone(), location, what };
+    if let Some(j) = scenario.joints.first() {
+        return Err(unsupported(j.location, format!("joint `{}` in a Bevy app (cablesim runs it)", j.name)));
+    }
+    if let Some(b) = scenario.bodies.iter().find(|b| b.motion.is_some()) {
+        return Err(unsupported(b.location, format!("the `motion` of body `{}` in a Bevy app (cablesim runs it)", b.name)));
+    }
+    let sim = &scenario.simulation;
+    if sim.substeps.unwrap_or(1) > 1 {
+        return Err(unsupported(Location { line: 0, col: 0 }, "[simulation] substeps > 1 in a Bevy app (cablesim runs it)".into()));
+    }
+    // Everything cablesim refuses, with its message.
+    SimWorld::new(scenario.clone())?;
+    let ic = &sim.integrator;
+    let params = SchemeParams { beta: ic.beta, gamma: ic.gamma, theta: ic.theta, alpha: ic.alpha, rho_inf: ic.rho_inf, w: ic.w };
+    let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
+    let (dt, gravity) = (sim.dt, sim.gravity);
+    app.insert_resource(Time::<Fixed>::from_duration(Duration::from_secs_f64(dt)));
+    app.insert_resource(TimestepMode::Fixed { dt: dt as f32, substeps: 1 });
+    {
+        let mut settings = app.world_mut().get_resource_or_insert_with(|| CableSettings { substeps: 1, step: None, gravity: None });
+        settings.step = Some(dt);
+        settings.gravity = Some(gravity);
+    }
+    app.add_systems(Startup, move |mut config: Query<&mut RapierConfiguration>| {
+        for mut c in &mut config {
+            c.gravity = gravity.as_vec3();
+        }
+    });
+    let world = app.world_mut();
+    let mut bodies = HashMap::new();
+    for b in &scenario.bodies {
+        let body = match b.kind {
+            BodyKind::Dynamic => RigidBody::Dynamic,
+            BodyKind::Fixed => RigidBody::Fixed,
+            BodyKind::Kinematic => RigidBody::KinematicPositionBased,
+        };
+        let collider = match b.shape {
+            Shape::Ball { radius } => Collider::ball(radius as f32),
+            Shape::Cuboid { half_extents: h } => Collider::cuboid(h.x as f32, h.y as f32, h.z as f32),
+            Shape::Capsule { radius, half_height } => Collider::capsule_y(half_height as f32, radius as f32),
+            Shape::Cylinder { radius, half_height } => Collider::cylinder(half_height as f32, radius as f32),
+        };
+        let mass = b.mass.unwrap_or(0.0);
+        let exact = BodyExact {
+            mass,
+            inertia: shape_inertia(&b.shape, mass),
+            position: b.position,
+            rotation: b.rotation,
+            linear_velocity: b.linear_velocity,
+            angular_velocity: b.angular_velocity,
+            motion: (b.kind != BodyKind::Dynamic).then(|| body_motion(b)),
+        };
+        let mut e = world.spawn((
+            Name::new(b.name.clone()),
+            body,
+            Transform::from_translation(b.position.as_vec3()).with_rotation(b.rotation.as_quat()),
+            collider,
+            Friction::coefficient(b.friction as f32),
+            Velocity { linear: b.linear_velocity.as_vec3(), angular: b.angular_velocity.as_vec3() },
+            Sleeping::disabled(),
+            exact,
+        ));
+        if b.kind == BodyKind::Dynamic {
+            e.insert(ColliderMassProperties::Mass(mass as f32));
+        }
+        bodies.insert(b.name.clone(), e.id());
+    }
+    let mut cables = Vec::new();
+    for c in &scenario.cables {
+        let section = RopeSection { linear_density: c.linear_density, ea: c.ea, ei: c.ei, ei2: c.ei2, gj: c.gj, min_breaking_load: 0.0 };
+        let anchor = |end: &CableEnd| match end {
+            CableEnd::Free => (CableAnchor::Free, None),
+            CableEnd::World { point, clamp } => (CableAnchor::World { point: point.as_vec3(), clamp: *clamp }, Some(*point)),
+            CableEnd::Body { body, anchor, clamp } => (CableAnchor::Body { entity: bodies[body], anchor: anchor.as_vec3(), clamp: *clamp }, Some(*anchor)),
+        };
+        let ((start, sp), (end, ep)) = (anchor(&c.start), anchor(&c.end));
+        let mut d = CableDescriptor::new(c.length, c.segments as usize, section, c.diameter, start, end);
+        d.shear_stiffness = c.shear_stiffness;
+        d.damping = c.damping;
+        d.tension_only = c.tension_only;
+        d.scheme = scheme.clone();
+        d.stress_free = c.stress_free;
+        d.static_start = sim.statics.then_some(sim.static_load_steps);
+        d.loads = c.loads.iter().map(|l| CablePointLoad { s: l.s, force: l.force, moment: l.moment }).collect();
+        let exact = CableExact { path: Some(c.path.clone()), start: sp, end: ep };
+        let e = world.spawn((Name::new(c.name.clone()), d, exact)).id();
+        cables.push((c.name.clone(), e));
+    }
+    world.insert_resource(ScenarioRun { scenario, bodies, cables, steps: 0, time: 0.0, rows: Vec::new(), failed: None });
+    app.add_systems(FixedUpdate, sample.in_set(CableSystems::Readout));
+    Ok(())
+}
+
+/// After every fixed step: the probe row (or the first failure).
+fn sample(
+    mut run: ResMut<ScenarioRun>,
+    sims: Query<&CableSim>,
+    ropes: Query<&CableRopeOf>,
+    ctx: ReadRapierContext,
+    handles: Query<&RapierRigidBodyHandle>,
+    mut diverged: MessageReader<CableDiverged>,
+) {
+    if let Some(m) = diverged.read().next() {
+        if run.failed.is_none() {
+            run.failed = Some((m.entity, m.time, m.message.clone()));
+        }
+    }
+    if run.failed.is_some() {
+        return;
+    }
+    let Ok(ctx) = ctx.single() else {
+        return;
+    };
+    run.steps += 1;
+    run.time = run.steps as f64 * run.scenario.simulation.dt;
+    let view = View::new(&run, &sims, &ropes, &ctx.rigidbody_set.bodies, &handles);
+    let mut row = Vec::new();
+    probe::sample(&run.scenario.probes, &view, &mut row);
+    let t = run.time;
+    run.rows.push((t, row));
+}
+
+/// What the probes read in the app: the cables' chains, the bodies they
+/// carry, and rapier's bodies.
+struct View<'a> {
+    run: &'a ScenarioRun,
+    /// The chains in the core's build order (cable entity order).
+    chains: Vec<&'a Cable>,
+    /// Cable name → (its chain, rope index).
+    ropes: HashMap<&'a str, (&'a Cable, usize)>,
+    /// Carried body name → (its chain, its place).
+    carried: HashMap<&'a str, (&'a Cable, BodyInChain)>,
+    bodies: &'a RigidBodySet,
+    handles: HashMap<&'a str, RigidBodyHandle>,
+}
+
+impl<'a> View<'a> {
+    fn new(
+        run: &'a ScenarioRun,
+        sims: &'a Query<&CableSim>,
+        ropes: &Query<&CableRopeOf>,
+        bodies: &'a RigidBodySet,
+        handles: &Query<&RapierRigidBodyHandle>,
+    ) -> View<'a> {
+        let mut own: Vec<(Entity, &'a CableSim)> = run.cables.iter().filter_map(|(_, e)| sims.get(*e).ok().map(|s| (*e, s))).collect();
+        own.sort_by_key(|(e, _)| super::systems::spawn_order(*e));
+        let mut by_name = HashMap::new();
+        for (name, e) in &run.cables {
+            if let Ok(s) = sims.get(*e) {
+                by_name.insert(name.as_str(), (&s.coupled.cable, 0));
+            } else if let Ok(of) = ropes.get(*e) {
+                if let Ok(s) = sims.get(of.cable) {
+                    by_name.insert(name.as_str(), (&s.coupled.cable, of.rope));
+                }
+            }
+        }
+        let mut carried = HashMap::new();
+        let mut body_handles = HashMap::new();
+        for (name, e) in &run.bodies {
+            let Ok(h) = handles.get(*e) else { continue };
+            body_handles.insert(name.as_str(), h.0);
+            for (_, s) in &own {
+                if let Some(c) = s.coupled.carried.iter().find(|c| c.body == h.0) {
+                    carried.insert(name.as_str(), (&s.coupled.cable, c.place));
+                }
+            }
+        }
+        View { run, chains: own.iter().map(|(_, s)| &s.coupled.cable).collect(), ropes: by_name, carried, bodies, handles: body_handles }
+    }
+}
+
+impl ProbeSource for View<'_> {
+    fn chains(&self) -> Vec<&Cable> {
+        self.chains.clone()
+    }
+
+    fn rapier_energies(&self) -> (f64, f64) {
+        let g = self.run.scenario.simulation.gravity;
+        let free = self.run.scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic && !self.carried.contains_key(b.name.as_str()));
+        // Summed as `cablesim` sums them: kinetic, then gravitational.
+        let free: Vec<(f64, DMat3, RigidBodyHandle)> = free
+            .filter_map(|b| self.handles.get(b.name.as_str()).map(|&h| (b.mass.unwrap_or(0.0), shape_inertia(&b.shape, b.mass.unwrap_or(0.0)), h)))
+            .collect();
+        let ke = free
+            .iter()
+            .map(|(m, i, h)| {
+                let (v, w) = velocity_of(self.bodies, *h);
+                rigid_energy(*m, i, pose_of(self.bodies, *h).1, v, w)
+            })
+            .sum();
+        let pe = free.iter().map(|(m, _, h)| -m * g.dot(pose_of(self.bodies, *h).0)).sum();
+        (ke, pe)
+    }
+
+    fn rope(&self, name: &str) -> Option<RopeView<'_>> {
+        self.ropes.get(name).and_then(|(c, k)| c.rope(*k))
+    }
+
+    fn body_state(&self, name: &str) -> (DVec3, DMat3, DVec3, DVec3) {
+        if let Some((c, place)) = self.carried.get(name) {
+            return c.model.body_state(place);
+        }
+        match self.handles.get(name) {
+            Some(&h) => {
+                let (p, q) = pose_of(self.bodies, h);
+                let (v, w) = velocity_of(self.bodies, h);
+                (p, DMat3::from_quat(q), v, w)
+            }
+            None => (DVec3::NAN, DMat3::NAN, DVec3::NAN, DVec3::NAN),
+        }
+    }
+
+    fn joint(&self, _name: &str, _quantity: Quantity) -> Probe {
+        // Joints are refused by `add_scenario`.
+        Probe::Scalar(f64::NAN)
+    }
+}

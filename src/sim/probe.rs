@@ -1,0 +1,94 @@
+//! Probe evaluation shared by the scenario runners: [`World`](super::World)
+//! (`cablesim`) and a scenario spawned into a Bevy app with the plugin
+//! ([`crate::plugin::scenario`]). Each runner says where a name's state is
+//! ([`ProbeSource`]); the values and their columns are computed here once,
+//! so the two give the same `results.csv` for the same state.
+
+use crate::cable::{Cable, RopeView};
+use crate::scenario::{self, Component, ProbeTarget, Quantity};
+use glam::{DMat3, DQuat, DVec3, EulerRot};
+
+/// One probe's value.
+pub(crate) enum Probe {
+    /// A scalar column.
+    Scalar(f64),
+    /// A vector: three columns, or one picked by the probe's component.
+    Vector(DVec3),
+}
+
+/// Where a scenario runner keeps what the probes read.
+pub(crate) trait ProbeSource {
+    /// The cables with their own chain, in the order the core built them
+    /// (energies are summed in this order).
+    fn chains(&self) -> Vec<&Cable>;
+    /// Kinetic energy and gravitational energy −m g·x of the dynamic
+    /// bodies rapier keeps (not those a cable carries), J.
+    fn rapier_energies(&self) -> (f64, f64);
+    /// The rope of the scenario cable `name`, in the scenario's direction.
+    fn rope(&self, name: &str) -> Option<RopeView<'_>>;
+    /// Body `name`: origin (m), orientation, velocity (m/s), angular
+    /// velocity (rad/s), world frame.
+    fn body_state(&self, name: &str) -> (DVec3, DMat3, DVec3, DVec3);
+    /// A joint probe's value (see the module docs of `world.rs`).
+    fn joint(&self, name: &str, quantity: Quantity) -> Probe;
+}
+
+/// The value of probe `p`.
+pub(crate) fn probe(src: &dyn ProbeSource, p: &scenario::Probe) -> Probe {
+    match &p.target {
+        ProbeTarget::System => {
+            // Cables (with the bodies they carry) + rapier's dynamic bodies.
+            let chains = src.chains();
+            let e = |f: fn(&Cable) -> f64| chains.iter().map(|c| f(c)).sum::<f64>();
+            let (ke, pe) = src.rapier_energies();
+            match p.quantity {
+                Quantity::KineticEnergy => Probe::Scalar(e(Cable::kinetic_energy) + ke),
+                _ => Probe::Scalar(e(Cable::energy) + ke + pe),
+            }
+        }
+        ProbeTarget::Body(name) => {
+            let (pos, rot, vel, w) = src.body_state(name);
+            Probe::Vector(match p.quantity {
+                Quantity::Position => pos,
+                Quantity::Velocity => vel,
+                Quantity::Rotation => {
+                    let (x, y, z) = DQuat::from_mat3(&rot).to_euler(EulerRot::XYZ);
+                    DVec3::new(x, y, z) * (180.0 / std::f64::consts::PI)
+                }
+                _ => w * (180.0 / std::f64::consts::PI),
+            })
+        }
+        ProbeTarget::Cable(name) => {
+            let Some(c) = src.rope(name) else {
+                return Probe::Scalar(f64::NAN);
+            };
+            let s = p.s.unwrap_or(0.0);
+            match p.quantity {
+                Quantity::Position => Probe::Vector(c.point_at(s).0),
+                Quantity::Velocity => Probe::Vector(c.point_at(s).1),
+                Quantity::Tension => Probe::Scalar(c.tension_at(s)),
+                _ => Probe::Scalar(c.stretched_length()),
+            }
+        }
+        ProbeTarget::Joint(name) => src.joint(name, p.quantity),
+        ProbeTarget::Winch(_) => Probe::Scalar(f64::NAN),
+    }
+}
+
+/// Appends the value of every probe column of `probes` (file order) to
+/// `out`, after clearing it.
+pub(crate) fn sample(probes: &[scenario::Probe], src: &dyn ProbeSource, out: &mut Vec<f64>) {
+    out.clear();
+    for p in probes {
+        match (probe(src, p), p.component) {
+            (Probe::Scalar(x), _) => out.push(x),
+            (Probe::Vector(v), None) => out.extend([v.x, v.y, v.z]),
+            (Probe::Vector(v), Some(c)) => out.push(match c {
+                Component::X => v.x,
+                Component::Y => v.y,
+                Component::Z => v.z,
+                Component::Norm => v.length(),
+            }),
+        }
+    }
+}
