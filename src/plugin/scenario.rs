@@ -37,23 +37,31 @@
 //! * the plugin builds, loads, statically solves and starts the cables in
 //!   `cablesim`'s order and steps them with the same core calls.
 //!
+//! Joints are spawned as bevy_rapier `ImpulseJoint`s on their body2's
+//! entity (a fixed `world` entity stands for the ground), built by
+//! `cablesim`'s own joint code; kinematic bodies follow their `motion`
+//! (moved in rapier before its step, and read in closed form by the
+//! cables).
+//!
 //! **Not yet spawned** (refused with [`SimError::Unsupported`] naming the
-//! item): joints (rapier joints, and the trolley rails whose drives
-//! `cablesim` runs in the chain), kinematic bodies with a `motion`, and
-//! `[simulation] substeps` above 1 (`cablesim` sub-steps cables and rapier
-//! together; the plugin's [`CablePlugin::substeps`](super::CablePlugin)
-//! sub-steps the cables within one rapier step). Everything `cablesim`
-//! refuses is refused here too, with the same message.
+//! item): a joint `drive`, a probe of a joint that rapier keeps (only the
+//! rail of a trolley a cable carries is probed), two joints on the same
+//! body2, and `[simulation] substeps` above 1 (`cablesim` sub-steps cables
+//! and rapier together; the plugin's
+//! [`CablePlugin::substeps`](super::CablePlugin) sub-steps the cables
+//! within one rapier step). Everything `cablesim` refuses is refused here
+//! too, with the same message.
 
 use super::components::{BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CablePointLoad, CableRopeOf, CableSim};
 use super::{CableSettings, CableSystems};
 use crate::cable::{BodyInChain, Cable, RopeSection, RopeView};
+use crate::coupling::Role;
 use crate::integrate::{Scheme, SchemeParams};
-use crate::scenario::{BodyKind, CableEnd, Location, Quantity, Scenario, Shape};
+use crate::scenario::{BodyKind, CableEnd, Location, ProbeTarget, Quantity, Scenario, Shape};
 use crate::sim::probe::{self, Probe, ProbeSource};
-use crate::sim::rapier::{pose_of, rigid_energy, velocity_of};
+use crate::sim::rapier::{joint_data, motion_pose, pose_of, rigid_energy, velocity_of};
 use crate::sim::{body_motion, shape_inertia, SimError, World as SimWorld};
-use bevy::math::{DMat3, DVec3};
+use bevy::math::{DMat3, DQuat, DVec3};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier3d::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
@@ -68,6 +76,8 @@ pub struct ScenarioRun {
     pub scenario: Scenario,
     /// Body name → its entity.
     pub bodies: HashMap<String, Entity>,
+    /// Joint name → the entity that holds its `ImpulseJoint` (its body2).
+    pub joints: HashMap<String, Entity>,
     /// Cable name → its entity, in file order.
     pub cables: Vec<(String, Entity)>,
     /// Fixed steps run.
@@ -91,18 +101,31 @@ pub struct ScenarioRun {
 pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
     let file = scenario.file.display().to_string();
     let unsupported = |location: Location, what: String| SimError::Unsupported { file: file.clone(), location, what };
-    if let Some(j) = scenario.joints.first() {
-        return Err(unsupported(j.location, format!("joint `{}` in a Bevy app (cablesim runs it)", j.name)));
-    }
-    if let Some(b) = scenario.bodies.iter().find(|b| b.motion.is_some()) {
-        return Err(unsupported(b.location, format!("the `motion` of body `{}` in a Bevy app (cablesim runs it)", b.name)));
-    }
     let sim = &scenario.simulation;
     if sim.substeps.unwrap_or(1) > 1 {
-        return Err(unsupported(Location { line: 0, col: 0 }, "[simulation] substeps > 1 in a Bevy app (cablesim runs it)".into()));
+        return Err(unsupported(
+            Location { line: 0, col: 0 },
+            format!("[simulation] substeps = {} (above 1) in a Bevy app (cablesim runs it)", sim.substeps.unwrap_or(1)),
+        ));
+    }
+    if let Some(j) = scenario.joints.iter().find(|j| j.drive.is_some()) {
+        return Err(unsupported(j.location, format!("the `drive` of joint `{}` in a Bevy app (cablesim runs it)", j.name)));
+    }
+    // bevy_rapier holds a joint on the entity of its body2 (one per entity).
+    for (k, j) in scenario.joints.iter().enumerate() {
+        if let Some(other) = scenario.joints[..k].iter().find(|o| o.body2 == j.body2) {
+            return Err(unsupported(j.location, format!("joint `{}` in a Bevy app: body `{}` is body2 of joint `{}` too", j.name, j.body2, other.name)));
+        }
     }
     // Everything cablesim refuses, with its message.
-    SimWorld::new(scenario.clone())?;
+    let rails: Vec<String> = SimWorld::new(scenario.clone())?.rails().into_iter().map(String::from).collect();
+    for p in &scenario.probes {
+        if let ProbeTarget::Joint(name) = &p.target {
+            if !rails.contains(name) {
+                return Err(unsupported(p.location, format!("probe `{}` of joint `{name}`, which rapier keeps, in a Bevy app (cablesim runs it)", p.name)));
+            }
+        }
+    }
     let ic = &sim.integrator;
     let params = SchemeParams { beta: ic.beta, gamma: ic.gamma, theta: ic.theta, alpha: ic.alpha, rho_inf: ic.rho_inf, w: ic.w };
     let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
@@ -121,6 +144,11 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
     });
     let world = app.world_mut();
     let mut bodies = HashMap::new();
+    // The ground (`world` in joints), as cablesim's: a fixed body without
+    // collider at the origin, created first.
+    if scenario.joints.iter().any(|j| j.body1 == "world" || j.body2 == "world") {
+        bodies.insert("world".to_string(), world.spawn((Name::new("world"), RigidBody::Fixed, Transform::IDENTITY)).id());
+    }
     for b in &scenario.bodies {
         let body = match b.kind {
             BodyKind::Dynamic => RigidBody::Dynamic,
@@ -137,8 +165,8 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
         let exact = BodyExact {
             mass,
             inertia: shape_inertia(&b.shape, mass),
-            position: b.position,
-            rotation: b.rotation,
+            position: b.position_at(0.0),
+            rotation: b.rotation_at(0.0),
             linear_velocity: b.linear_velocity,
             angular_velocity: b.angular_velocity,
             motion: (b.kind != BodyKind::Dynamic).then(|| body_motion(b)),
@@ -146,7 +174,7 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
         let mut e = world.spawn((
             Name::new(b.name.clone()),
             body,
-            Transform::from_translation(b.position.as_vec3()).with_rotation(b.rotation.as_quat()),
+            Transform::from_translation(b.position_at(0.0).as_vec3()).with_rotation(b.rotation_at(0.0).as_quat()),
             collider,
             Friction::coefficient(b.friction as f32),
             Velocity { linear: b.linear_velocity.as_vec3(), angular: b.angular_velocity.as_vec3() },
@@ -157,6 +185,15 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
             e.insert(ColliderMassProperties::Mass(mass as f32));
         }
         bodies.insert(b.name.clone(), e.id());
+    }
+    // Joints, on body2's entity, built as cablesim builds them.
+    let mut joints = HashMap::new();
+    for j in &scenario.joints {
+        let rotation = |name: &str| scenario.body(name).map_or(DQuat::IDENTITY, |b| b.rotation_at(0.0).as_quat().as_dquat().normalize());
+        let data = joint_data(j, rotation(&j.body1), rotation(&j.body2), dt);
+        let (parent, entity) = (bodies[&j.body1], bodies[&j.body2]);
+        world.entity_mut(entity).insert(ImpulseJoint::new(parent, TypedJoint::GenericJoint(GenericJoint { raw: data })));
+        joints.insert(j.name.clone(), entity);
     }
     let mut cables = Vec::new();
     for c in &scenario.cables {
@@ -179,9 +216,27 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
         let e = world.spawn((Name::new(c.name.clone()), d, exact)).id();
         cables.push((c.name.clone(), e));
     }
-    world.insert_resource(ScenarioRun { scenario, bodies, cables, steps: 0, time: 0.0, rows: Vec::new(), failed: None });
-    app.add_systems(FixedUpdate, sample.in_set(CableSystems::Readout));
+    world.insert_resource(ScenarioRun { scenario, bodies, joints, cables, steps: 0, time: 0.0, rows: Vec::new(), failed: None });
+    app.add_systems(FixedUpdate, (move_kinematic.after(CableSystems::Step).before(PhysicsSet::StepSimulation), sample.in_set(CableSystems::Readout)));
     Ok(())
+}
+
+/// Before rapier's step, as `cablesim` does: kinematic bodies with a
+/// `motion` go to its pose at the end of the step.
+fn move_kinematic(run: Res<ScenarioRun>, mut ctx: WriteRapierContext, handles: Query<&RapierRigidBodyHandle>) {
+    let Ok(mut ctx) = ctx.single_mut() else {
+        return;
+    };
+    let dt = run.scenario.simulation.dt;
+    let t = run.steps as f64 * dt;
+    for b in &run.scenario.bodies {
+        let (Some(m), Some(h)) = (&b.motion, run.bodies.get(&b.name).and_then(|e| handles.get(*e).ok())) else {
+            continue;
+        };
+        if let Some(rb) = ctx.rigidbody_set.bodies.get_mut(h.0) {
+            rb.set_next_kinematic_position(motion_pose(m, b.position, b.rotation, t + dt));
+        }
+    }
 }
 
 /// After every fixed step: the probe row (or the first failure).
@@ -191,6 +246,7 @@ fn sample(
     ropes: Query<&CableRopeOf>,
     ctx: ReadRapierContext,
     handles: Query<&RapierRigidBodyHandle>,
+    joint_handles: Query<&RapierImpulseJointHandle>,
     mut diverged: MessageReader<CableDiverged>,
 ) {
     if let Some(m) = diverged.read().next() {
@@ -206,7 +262,7 @@ fn sample(
     };
     run.steps += 1;
     run.time = run.steps as f64 * run.scenario.simulation.dt;
-    let view = View::new(&run, &sims, &ropes, &ctx.rigidbody_set.bodies, &handles);
+    let view = View::new(&run, &sims, &ropes, &ctx.rigidbody_set.bodies, &handles, &joint_handles);
     let mut row = Vec::new();
     probe::sample(&run.scenario.probes, &view, &mut row);
     let t = run.time;
@@ -225,6 +281,8 @@ struct View<'a> {
     carried: HashMap<&'a str, (&'a Cable, BodyInChain)>,
     bodies: &'a RigidBodySet,
     handles: HashMap<&'a str, RigidBodyHandle>,
+    /// Rail joint name → the chain of the trolley on it.
+    rails: HashMap<&'a str, &'a Cable>,
 }
 
 impl<'a> View<'a> {
@@ -234,6 +292,7 @@ impl<'a> View<'a> {
         ropes: &Query<&CableRopeOf>,
         bodies: &'a RigidBodySet,
         handles: &Query<&RapierRigidBodyHandle>,
+        joint_handles: &Query<&RapierImpulseJointHandle>,
     ) -> View<'a> {
         let mut own: Vec<(Entity, &'a CableSim)> = run.cables.iter().filter_map(|(_, e)| sims.get(*e).ok().map(|s| (*e, s))).collect();
         own.sort_by_key(|(e, _)| super::systems::spawn_order(*e));
@@ -258,7 +317,16 @@ impl<'a> View<'a> {
                 }
             }
         }
-        View { run, chains: own.iter().map(|(_, s)| &s.coupled.cable).collect(), ropes: by_name, carried, bodies, handles: body_handles }
+        let mut rails = HashMap::new();
+        for (name, e) in &run.joints {
+            let Ok(h) = joint_handles.get(*e) else { continue };
+            for (_, s) in &own {
+                if matches!(s.coupled.roles[0], Some((_, Role::Trolley { joint, .. })) if joint == h.0) {
+                    rails.insert(name.as_str(), &s.coupled.cable);
+                }
+            }
+        }
+        View { run, chains: own.iter().map(|(_, s)| &s.coupled.cable).collect(), ropes: by_name, carried, bodies, handles: body_handles, rails }
     }
 }
 
@@ -303,8 +371,8 @@ impl ProbeSource for View<'_> {
         }
     }
 
-    fn joint(&self, _name: &str, _quantity: Quantity) -> Probe {
-        // Joints are refused by `add_scenario`.
-        Probe::Scalar(f64::NAN)
+    fn joint(&self, name: &str, quantity: Quantity) -> Probe {
+        // Probes of other joints are refused by `add_scenario`.
+        self.rails.get(name).map_or(Probe::Scalar(f64::NAN), |c| probe::rail(c, quantity))
     }
 }

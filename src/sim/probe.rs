@@ -4,6 +4,7 @@
 //! ([`ProbeSource`]); the values and their columns are computed here once,
 //! so the two give the same `results.csv` for the same state.
 
+use crate::cable::chain::IN_CHAIN;
 use crate::cable::{Cable, RopeView};
 use crate::scenario::{self, Component, ProbeTarget, Quantity};
 use glam::{DMat3, DQuat, DVec3, EulerRot};
@@ -72,6 +73,22 @@ pub(crate) fn probe(src: &dyn ProbeSource, p: &scenario::Probe) -> Probe {
         }
         ProbeTarget::Joint(name) => src.joint(name, p.quantity),
         ProbeTarget::Winch(_) => Probe::Scalar(f64::NAN),
+    }
+}
+
+/// A probe of the rail of a trolley that `cable` carries (the chain's root
+/// prismatic sub-joint): `position` the slide (m), `velocity` its rate
+/// (m/s), `force` the drive force along the rail, the motor's damper
+/// included (N, world vector).
+pub(crate) fn rail(cable: &Cable, quantity: Quantity) -> Probe {
+    match quantity {
+        Quantity::Position => Probe::Scalar(cable.state.q[0]),
+        Quantity::Velocity => Probe::Scalar(cable.state.v[0]),
+        _ => {
+            let ch = &cable.model.chain;
+            let axis = ch.link_rotation(0).expect(IN_CHAIN) * ch.joints()[0].axis;
+            Probe::Vector(axis * (ch.joint_forces()[0] - ch.joints()[0].damping * cable.state.v[0]))
+        }
     }
 }
 

@@ -107,6 +107,40 @@ pub(crate) fn rigid_energy(mass: f64, inertia: &DMat3, q: DQuat, v: DVec3, w: DV
     0.5 * mass * v.length_squared() + 0.5 * wl.dot(*inertia * wl)
 }
 
+/// The rapier joint of scenario joint `j` between bodies at orientations
+/// `r1` and `r2` at t = 0 (see [`RapierWorld::add_joint`]).
+pub(crate) fn joint_data(j: &Joint, r1: DQuat, r2: DQuat, dt: f64) -> rp::GenericJoint {
+    let axis = j.axis.unwrap_or(DVec3::X);
+    let frame = DQuat::from_rotation_arc(DVec3::X, axis);
+    let locked = match j.kind {
+        JointKind::Fixed => rp::JointAxesMask::LOCKED_FIXED_AXES,
+        JointKind::Revolute => rp::JointAxesMask::LOCKED_REVOLUTE_AXES,
+        JointKind::Prismatic => rp::JointAxesMask::LOCKED_PRISMATIC_AXES,
+        JointKind::Spherical => rp::JointAxesMask::LOCKED_SPHERICAL_AXES,
+    };
+    let mut data = rp::GenericJointBuilder::new(locked).contacts_enabled(false).build();
+    data.local_frame1 = pose(j.anchor1, frame);
+    data.local_frame2 = pose(j.anchor2, (r2.inverse() * r1 * frame).normalize());
+    let free = if j.kind == JointKind::Revolute { rp::JointAxis::AngX } else { rp::JointAxis::LinX };
+    if let Some([lo, hi]) = j.limits {
+        data.set_limits(free, [lo as f32, hi as f32]);
+    }
+    if let Some(Drive::Velocity { velocity, max_force }) = &j.drive {
+        // Implicit velocity motor: the velocity error halves every frame
+        // (acceleration-based damping 1/dt), saturating at max_force.
+        data.set_motor_model(free, rp::MotorModel::AccelerationBased);
+        data.set_motor_velocity(free, velocity.value_at(dt) as f32, (1.0 / dt) as f32);
+        data.set_motor_max_force(free, *max_force as f32);
+    }
+    data
+}
+
+/// The pose of a kinematic body with motion `m` from `p0`, `r0` at time
+/// `t`, in rapier's f32.
+pub(crate) fn motion_pose(m: &Motion, p0: DVec3, r0: DQuat, t: f64) -> rp::Pose {
+    pose(m.position_at(t, p0), m.rotation_at(t) * r0)
+}
+
 impl RapierWorld {
     /// An empty world with `gravity` stepping at `dt`.
     pub fn new(gravity: DVec3, dt: f64) -> RapierWorld {
@@ -175,27 +209,7 @@ impl RapierWorld {
         let (_, r1) = self.pose_of(h1);
         let (_, r2) = self.pose_of(h2);
         let axis = j.axis.unwrap_or(DVec3::X);
-        let frame = DQuat::from_rotation_arc(DVec3::X, axis);
-        let locked = match j.kind {
-            JointKind::Fixed => rp::JointAxesMask::LOCKED_FIXED_AXES,
-            JointKind::Revolute => rp::JointAxesMask::LOCKED_REVOLUTE_AXES,
-            JointKind::Prismatic => rp::JointAxesMask::LOCKED_PRISMATIC_AXES,
-            JointKind::Spherical => rp::JointAxesMask::LOCKED_SPHERICAL_AXES,
-        };
-        let mut data = rp::GenericJointBuilder::new(locked).contacts_enabled(false).build();
-        data.local_frame1 = pose(j.anchor1, frame);
-        data.local_frame2 = pose(j.anchor2, (r2.inverse() * r1 * frame).normalize());
-        let free = if j.kind == JointKind::Revolute { rp::JointAxis::AngX } else { rp::JointAxis::LinX };
-        if let Some([lo, hi]) = j.limits {
-            data.set_limits(free, [lo as f32, hi as f32]);
-        }
-        if let Some(Drive::Velocity { velocity, max_force }) = &j.drive {
-            // Implicit velocity motor: the velocity error halves every frame
-            // (acceleration-based damping 1/dt), saturating at max_force.
-            data.set_motor_model(free, rp::MotorModel::AccelerationBased);
-            data.set_motor_velocity(free, velocity.value_at(dt) as f32, (1.0 / dt) as f32);
-            data.set_motor_max_force(free, *max_force as f32);
-        }
+        let data = joint_data(j, r1, r2, dt);
         let handle = self.pw.insert_impulse_joint(h1, h2, data);
         self.joints.push(RapierJoint {
             name: j.name.clone(),
@@ -271,8 +285,7 @@ impl RapierWorld {
     pub fn prepare_step(&mut self, t: f64, dt: f64) {
         for b in &self.bodies {
             if let Some((m, p0, r0)) = &b.motion {
-                let next = pose(m.position_at(t + dt, *p0), m.rotation_at(t + dt) * *r0);
-                self.pw.bodies[b.handle].set_next_kinematic_position(next);
+                self.pw.bodies[b.handle].set_next_kinematic_position(motion_pose(m, *p0, *r0, t + dt));
             }
         }
         for k in 0..self.joints.len() {

@@ -123,7 +123,6 @@
 
 use super::probe::Probe;
 use super::rapier::RapierWorld;
-use crate::cable::chain::IN_CHAIN;
 use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
 use crate::coupling::{rail_drive, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
 use crate::integrate::{Scheme, SchemeParams, Substeps};
@@ -616,6 +615,12 @@ impl World {
         (b.position_at(t), DMat3::from_quat(b.rotation_at(t)), v, w)
     }
 
+    /// Names of the prismatic joints of the trolleys the cables carry (the
+    /// rails whose coordinate is the chain's root sub-joint).
+    pub(crate) fn rails(&self) -> Vec<&str> {
+        self.names.iter().filter_map(|n| n.slide.as_ref().map(|(j, _)| j.as_str())).collect()
+    }
+
     /// Names of the cables.
     pub fn cable_names(&self) -> Vec<&str> {
         self.scenario.cables.iter().map(|c| c.name.as_str()).collect()
@@ -647,14 +652,7 @@ impl super::probe::ProbeSource for World {
     fn joint(&self, name: &str, quantity: Quantity) -> Probe {
         let c = self.names.iter().position(|n| n.slide.as_ref().is_some_and(|(j, _)| j == name)).map(|i| &self.core.cables[i]);
         match (c, quantity) {
-            (Some(c), Quantity::Position) => Probe::Scalar(c.cable.state.q[0]),
-            (Some(c), Quantity::Velocity) => Probe::Scalar(c.cable.state.v[0]),
-            (Some(c), _) => {
-                // The drive force along the rail (the motor's damper included).
-                let ch = &c.cable.model.chain;
-                let axis = ch.link_rotation(0).expect(IN_CHAIN) * ch.joints()[0].axis;
-                Probe::Vector(axis * (ch.joint_forces()[0] - ch.joints()[0].damping * c.cable.state.v[0]))
-            }
+            (Some(c), q) => super::probe::rail(&c.cable, q),
             (None, q) => match self.rapier.joints.iter().find(|j| j.name == *name) {
                 // Rapier joint: revolute in degrees, prismatic in m.
                 Some(j) => {
