@@ -13,11 +13,8 @@ use bevy_rapier_cable::scenario::{load, Scenario};
 use bevy_rapier_cable::sim::{SimError, World};
 use std::path::Path;
 
-/// Simulated time compared per scenario, s (the whole run when shorter).
-const SPAN: f64 = 3.0;
-
 fn frames(sc: &Scenario) -> u64 {
-    (sc.simulation.duration.min(SPAN) / sc.simulation.dt).round() as u64
+    (sc.simulation.duration / sc.simulation.dt).round() as u64
 }
 
 fn cablesim_rows(sc: &Scenario) -> Vec<(f64, Vec<f64>)> {
@@ -46,7 +43,8 @@ fn plugin_rows(sc: &Scenario) -> Result<Vec<(f64, Vec<f64>)>, SimError> {
     app.cleanup();
     // The first update runs Startup and no fixed step (its delta is 0).
     app.update();
-    for _ in 0..frames(sc) {
+    // One update is one fixed step: a scenario sub-step.
+    for _ in 0..frames(sc) * sc.simulation.substeps.unwrap_or(1).max(1) as u64 {
         app.update();
         if let Some((e, t, m)) = &app.world().resource::<ScenarioRun>().failed {
             panic!("plugin: cable {e} failed at t = {t}: {m}");
@@ -65,34 +63,94 @@ fn shipped() -> Vec<String> {
     names
 }
 
-/// What the Bevy side does not spawn yet, and the item its refusal names.
-const NOT_YET: [(&str, &str); 1] = [("boom_hoist", "substeps = 12 (above 1)")];
-
-#[test]
-fn every_shipped_scenario_gives_the_same_rows_in_cablesim_and_in_a_bevy_app() {
-    let mut same = Vec::new();
-    for name in shipped() {
-        let sc = load(Path::new(&format!("assets/scenarios/{name}.toml"))).unwrap_or_else(|e| panic!("{e}"));
-        let plugin = plugin_rows(&sc);
-        if let Some((_, what)) = NOT_YET.iter().find(|(n, _)| *n == name) {
-            let e = plugin.expect_err("the Bevy side now spawns this scenario: compare it and update NOT_YET and the docs");
-            let text = e.to_string();
-            assert!(matches!(e, SimError::Unsupported { .. }) && text.contains(what) && text.contains("not supported yet"), "{name}: {text}");
-            println!("{name}: refused: {text}");
-            continue;
-        }
-        let plugin = plugin.unwrap_or_else(|e| panic!("{name}: {e}"));
-        let cablesim = cablesim_rows(&sc);
-        assert_eq!(plugin.len(), cablesim.len(), "{name}: rows");
-        assert!(!cablesim.is_empty() && !cablesim[0].1.is_empty(), "{name}: nothing compared");
-        for (k, ((tp, p), (tc, c))) in plugin.iter().zip(&cablesim).enumerate() {
-            assert_eq!(tp.to_bits(), tc.to_bits(), "{name}: time of row {k}");
-            let differ: Vec<(usize, f64, f64)> =
-                p.iter().zip(c).enumerate().filter(|(_, (a, b))| a.to_bits() != b.to_bits()).map(|(i, (a, b))| (i, *a, *b)).collect();
-            assert!(differ.is_empty(), "{name}: row {k} (t = {tc} s) differs in columns (index, plugin, cablesim) {differ:?}");
-        }
-        println!("{name}: {} rows × {} columns identical", cablesim.len(), cablesim[0].1.len());
-        same.push(name);
+/// Runs the shipped scenario `name` both ways over its whole duration and
+/// compares every row, bit for bit.
+fn compare(name: &str) {
+    let sc = load(Path::new(&format!("assets/scenarios/{name}.toml"))).unwrap_or_else(|e| panic!("{e}"));
+    let plugin = plugin_rows(&sc).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let cablesim = cablesim_rows(&sc);
+    assert_eq!(plugin.len(), cablesim.len(), "{name}: rows");
+    assert!(!cablesim.is_empty() && !cablesim[0].1.is_empty(), "{name}: nothing compared");
+    for (k, ((tp, p), (tc, c))) in plugin.iter().zip(&cablesim).enumerate() {
+        assert_eq!(tp.to_bits(), tc.to_bits(), "{name}: time of row {k}");
+        let differ: Vec<(usize, f64, f64)> =
+            p.iter().zip(c).enumerate().filter(|(_, (a, b))| a.to_bits() != b.to_bits()).map(|(i, (a, b))| (i, *a, *b)).collect();
+        assert!(differ.is_empty(), "{name}: row {k} (t = {tc} s) differs in columns (index, plugin, cablesim) {differ:?}");
     }
-    assert_eq!(same.len() + NOT_YET.len(), shipped().len());
+    println!("{name}: {} rows × {} columns identical", cablesim.len(), cablesim[0].1.len());
+}
+
+/// The shipped scenarios compared below, one test each.
+const COMPARED: [&str; 15] = [
+    "axial_bounce",
+    "bend_45",
+    "boom_hoist",
+    "cantilever_end_moment",
+    "cantilever_tip_load",
+    "catenary",
+    "hanging_chain",
+    "hanging_payload",
+    "pendulum_60deg",
+    "perf_swing_1000",
+    "spin_up",
+    "taut_string",
+    "trolley_kick",
+    "trolley_pendulum",
+    "two_leg_sling",
+];
+
+/// A scenario added to `assets/scenarios` must be added here too.
+#[test]
+fn every_shipped_scenario_is_compared() {
+    assert_eq!(shipped(), COMPARED.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+}
+
+macro_rules! same_rows {
+    ($($name:ident),* $(,)?) => {
+        $(
+            #[test]
+            fn $name() {
+                compare(stringify!($name));
+            }
+        )*
+    };
+}
+
+same_rows!(
+    axial_bounce,
+    bend_45,
+    boom_hoist,
+    cantilever_end_moment,
+    cantilever_tip_load,
+    catenary,
+    hanging_chain,
+    hanging_payload,
+    pendulum_60deg,
+    perf_swing_1000,
+    spin_up,
+    taut_string,
+    trolley_kick,
+    trolley_pendulum,
+    two_leg_sling,
+);
+
+/// What the Bevy side does not spawn yet is refused with an error that
+/// names the item and where it is: a joint drive (cablesim's rail drive law
+/// and the plugin's rapier-motor law are not one yet), and a second joint
+/// on the same body2 (bevy_rapier holds one joint per entity).
+#[test]
+fn what_a_bevy_app_cannot_run_yet_is_refused_by_name() {
+    let base = std::fs::read_to_string("assets/scenarios/trolley_kick.toml").expect("trolley_kick");
+    let driven = base.replace("axis = [1.0, 0.0, 0.0]", "axis = [1.0, 0.0, 0.0]\ndrive = { velocity = [[0, 0], [1, 0.5]], max_force = 1e4 }");
+    assert_ne!(driven, base, "the rail's axis line moved: update this test");
+    let sc = bevy_rapier_cable::scenario::parse(&driven, "driven.toml").unwrap_or_else(|e| panic!("{e}"));
+    World::new(sc.clone()).unwrap_or_else(|e| panic!("cablesim runs it: {e}"));
+    let e = plugin_rows(&sc).expect_err("a joint drive in a Bevy app").to_string();
+    assert!(e.starts_with("driven.toml:") && e.contains("the `drive` of joint `rail`") && e.contains("not supported yet"), "{e}");
+    let second = format!(
+        "{base}\n[[joint]]\nname = \"stop\"\ntype = \"spherical\"\nbody1 = \"world\"\nbody2 = \"trolley\"\nanchor1 = [0.0, 0.0, 0.0]\nanchor2 = [0.0, 0.0, 0.0]\n"
+    );
+    let sc = bevy_rapier_cable::scenario::parse(&second, "second.toml").unwrap_or_else(|e| panic!("{e}"));
+    let e = plugin_rows(&sc).expect_err("two joints on one body2").to_string();
+    assert!(e.contains("joint `stop`") && e.contains("body `trolley` is body2 of joint `rail` too"), "{e}");
 }

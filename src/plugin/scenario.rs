@@ -26,7 +26,7 @@
 //! ```
 //!
 //! What makes it the same run as `cablesim` (tested bit for bit on the
-//! shipped scenarios it supports, `tests/plugin_scenarios.rs`):
+//! 15 shipped scenarios over their whole duration, `tests/plugin_scenarios.rs`):
 //! * the scenario's f64 data reach the core unrounded: cable paths and
 //!   anchor points ([`CableExact`]), body mass properties, poses, initial
 //!   velocities and the closed-form pose of fixed bodies ([`BodyExact`]),
@@ -43,23 +43,28 @@
 //! (moved in rapier before its step, and read in closed form by the
 //! cables).
 //!
+//! `[simulation] substeps` = n makes the app's fixed step `dt / n`: cables
+//! and rapier step together n times per frame, as in `cablesim`, and a
+//! row is sampled every n fixed steps. What bevy_rapier has no component
+//! for is set on the rapier bodies directly (gyroscopic torques), and the
+//! joints rapier keeps are recorded as `cablesim` records them (unwrapped
+//! revolute angles, for their probes).
+//!
 //! **Not yet spawned** (refused with [`SimError::Unsupported`] naming the
-//! item): a joint `drive`, a probe of a joint that rapier keeps (only the
-//! rail of a trolley a cable carries is probed), two joints on the same
-//! body2, and `[simulation] substeps` above 1 (`cablesim` sub-steps cables
-//! and rapier together; the plugin's
-//! [`CablePlugin::substeps`](super::CablePlugin) sub-steps the cables
-//! within one rapier step). Everything `cablesim` refuses is refused here
-//! too, with the same message.
+//! item): a joint `drive` (`cablesim` drives an absorbed trolley's rail in
+//! the chain with its own law, the plugin reads rapier's joint motor; the
+//! two must become one), and two joints on the same body2 (bevy_rapier
+//! holds one joint per entity). Everything `cablesim` refuses is refused
+//! here too, with the same message.
 
 use super::components::{BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CablePointLoad, CableRopeOf, CableSim};
 use super::{CableSettings, CableSystems};
 use crate::cable::{BodyInChain, Cable, RopeSection, RopeView};
 use crate::coupling::Role;
 use crate::integrate::{Scheme, SchemeParams};
-use crate::scenario::{BodyKind, CableEnd, Location, ProbeTarget, Quantity, Scenario, Shape};
+use crate::scenario::{BodyKind, CableEnd, Location, Quantity, Scenario, Shape};
 use crate::sim::probe::{self, Probe, ProbeSource};
-use crate::sim::rapier::{joint_data, motion_pose, pose_of, rigid_energy, velocity_of};
+use crate::sim::rapier::{joint_data, motion_pose, pose_of, rigid_energy, velocity_of, RapierJoint};
 use crate::sim::{body_motion, shape_inertia, SimError, World as SimWorld};
 use bevy::math::{DMat3, DQuat, DVec3};
 use bevy::prelude::*;
@@ -80,15 +85,91 @@ pub struct ScenarioRun {
     pub joints: HashMap<String, Entity>,
     /// Cable name → its entity, in file order.
     pub cables: Vec<(String, Entity)>,
-    /// Fixed steps run.
+    /// Sub-steps per frame (`[simulation] substeps`): the app's fixed step
+    /// is `dt / substeps`, and a row is sampled every `substeps` fixed steps.
+    pub substeps: u32,
+    /// Sub-steps run in the current frame.
+    pub substep: u32,
+    /// Frames run.
     pub steps: u64,
     /// Simulation time after the last step, s (`steps · dt`, as `cablesim`).
     pub time: f64,
     /// (time s, every probe column in file order) after every fixed step,
     /// the columns of `cablesim`'s `results.csv`.
     pub rows: Vec<(f64, Vec<f64>)>,
-    /// The first failure: (cable entity, time s, message). Sampling stops.
+    /// The first failure: (cable or body entity, time s, message).
+    /// Sampling stops.
     pub failed: Option<(Entity, f64, String)>,
+    /// The joints rapier keeps, as cablesim records them (unwrapped angles),
+    /// once bevy_rapier has created them.
+    rapier_joints: Option<Vec<RapierJoint>>,
+}
+
+impl ScenarioRun {
+    /// Time at the start of the current sub-step, s (cablesim's
+    /// `t0 + k h`).
+    fn substep_time(&self) -> f64 {
+        let sim = &self.scenario.simulation;
+        self.steps as f64 * sim.dt + self.substep as f64 * (sim.dt / self.substeps as f64)
+    }
+}
+
+/// Once, after bevy_rapier has created the bodies and joints and before
+/// the cables are built: what cablesim's rapier world sets that bevy_rapier
+/// has no component for (gyroscopic torques on dynamic bodies), and the
+/// records of the joints.
+fn prepare(mut run: ResMut<ScenarioRun>, mut ctx: WriteRapierContext, handles: Query<&RapierRigidBodyHandle>, joint_handles: Query<&RapierImpulseJointHandle>) {
+    if run.rapier_joints.is_some() {
+        return;
+    }
+    let Ok(mut ctx) = ctx.single_mut() else {
+        return;
+    };
+    let bodies = &mut ctx.rigidbody_set.bodies;
+    let handle = |name: &str| run.bodies.get(name).and_then(|e| handles.get(*e).ok()).map(|h| h.0);
+    for b in run.scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic) {
+        if let Some(rb) = handle(&b.name).and_then(|h| bodies.get_mut(h)) {
+            rb.enable_gyroscopic_forces(true);
+        }
+    }
+    let mut records = Vec::new();
+    for j in &run.scenario.joints {
+        let (Some(h1), Some(h2), Some(jh)) = (handle(&j.body1), handle(&j.body2), run.joints.get(&j.name).and_then(|e| joint_handles.get(*e).ok())) else {
+            continue;
+        };
+        let (r1, r2) = (pose_of(bodies, h1).1, pose_of(bodies, h2).1);
+        records.push(RapierJoint::new(j, jh.0, [h1, h2], r1, r2));
+    }
+    run.rapier_joints = Some(records);
+}
+
+/// After rapier's step, as cablesim does: a body whose state is no longer
+/// finite fails the run; revolute angles are unwrapped.
+fn after_rapier_step(mut run: ResMut<ScenarioRun>, ctx: ReadRapierContext, handles: Query<&RapierRigidBodyHandle>) {
+    let Ok(ctx) = ctx.single() else {
+        return;
+    };
+    let bodies = &ctx.rigidbody_set.bodies;
+    if run.failed.is_none() {
+        let t = run.substep_time();
+        for b in &run.scenario.bodies {
+            let Some((e, rb)) = run.bodies.get(&b.name).and_then(|e| Some((*e, bodies.get(handles.get(*e).ok()?.0)?))) else { continue };
+            let p = rb.position();
+            let finite = p.translation.is_finite() && p.rotation.is_finite() && rb.linvel().is_finite() && rb.angvel().is_finite();
+            if !finite || !rb.is_enabled() {
+                let message = SimError::BodyDiverged { body: b.name.clone(), time: t }.to_string();
+                run.failed = Some((e, t, message));
+                break;
+            }
+        }
+    }
+    let iterations = ctx.simulation.integration_parameters.num_solver_iterations.max(1) as f64;
+    let h_sub = ctx.simulation.integration_parameters.dt as f64 / iterations;
+    if let Some(joints) = run.rapier_joints.as_mut() {
+        for j in joints {
+            j.after_step(bodies, &ctx.joints.impulse_joints, h_sub);
+        }
+    }
 }
 
 /// Spawns `scenario` into `app` (which must have bevy_rapier's plugin in
@@ -102,12 +183,6 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
     let file = scenario.file.display().to_string();
     let unsupported = |location: Location, what: String| SimError::Unsupported { file: file.clone(), location, what };
     let sim = &scenario.simulation;
-    if sim.substeps.unwrap_or(1) > 1 {
-        return Err(unsupported(
-            Location { line: 0, col: 0 },
-            format!("[simulation] substeps = {} (above 1) in a Bevy app (cablesim runs it)", sim.substeps.unwrap_or(1)),
-        ));
-    }
     if let Some(j) = scenario.joints.iter().find(|j| j.drive.is_some()) {
         return Err(unsupported(j.location, format!("the `drive` of joint `{}` in a Bevy app (cablesim runs it)", j.name)));
     }
@@ -118,23 +193,21 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
         }
     }
     // Everything cablesim refuses, with its message.
-    let rails: Vec<String> = SimWorld::new(scenario.clone())?.rails().into_iter().map(String::from).collect();
-    for p in &scenario.probes {
-        if let ProbeTarget::Joint(name) = &p.target {
-            if !rails.contains(name) {
-                return Err(unsupported(p.location, format!("probe `{}` of joint `{name}`, which rapier keeps, in a Bevy app (cablesim runs it)", p.name)));
-            }
-        }
-    }
+    SimWorld::new(scenario.clone())?;
     let ic = &sim.integrator;
     let params = SchemeParams { beta: ic.beta, gamma: ic.gamma, theta: ic.theta, alpha: ic.alpha, rho_inf: ic.rho_inf, w: ic.w };
     let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
+    // The app's fixed step is the scenario's sub-step: cables and rapier
+    // step together `substeps` times per frame, as in cablesim.
+    let substeps = sim.substeps.unwrap_or(1).max(1);
     let (dt, gravity) = (sim.dt, sim.gravity);
-    app.insert_resource(Time::<Fixed>::from_duration(Duration::from_secs_f64(dt)));
-    app.insert_resource(TimestepMode::Fixed { dt: dt as f32, substeps: 1 });
+    let h = dt / substeps as f64;
+    app.insert_resource(Time::<Fixed>::from_duration(Duration::from_secs_f64(h)));
+    app.insert_resource(TimestepMode::Fixed { dt: h as f32, substeps: 1 });
     {
         let mut settings = app.world_mut().get_resource_or_insert_with(|| CableSettings { substeps: 1, step: None, gravity: None });
-        settings.step = Some(dt);
+        settings.substeps = 1;
+        settings.step = Some(h);
         settings.gravity = Some(gravity);
     }
     app.add_systems(Startup, move |mut config: Query<&mut RapierConfiguration>| {
@@ -216,8 +289,28 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
         let e = world.spawn((Name::new(c.name.clone()), d, exact)).id();
         cables.push((c.name.clone(), e));
     }
-    world.insert_resource(ScenarioRun { scenario, bodies, joints, cables, steps: 0, time: 0.0, rows: Vec::new(), failed: None });
-    app.add_systems(FixedUpdate, (move_kinematic.after(CableSystems::Step).before(PhysicsSet::StepSimulation), sample.in_set(CableSystems::Readout)));
+    world.insert_resource(ScenarioRun {
+        scenario,
+        bodies,
+        joints,
+        cables,
+        substeps,
+        substep: 0,
+        steps: 0,
+        time: 0.0,
+        rows: Vec::new(),
+        failed: None,
+        rapier_joints: None,
+    });
+    app.add_systems(
+        FixedUpdate,
+        (
+            prepare.after(PhysicsSet::SyncBackend).before(CableSystems::Init),
+            move_kinematic.after(CableSystems::Step).before(PhysicsSet::StepSimulation),
+            after_rapier_step.after(PhysicsSet::StepSimulation).before(CableSystems::WriteBodies),
+            sample.in_set(CableSystems::Readout),
+        ),
+    );
     Ok(())
 }
 
@@ -227,14 +320,14 @@ fn move_kinematic(run: Res<ScenarioRun>, mut ctx: WriteRapierContext, handles: Q
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
-    let dt = run.scenario.simulation.dt;
-    let t = run.steps as f64 * dt;
+    let h = run.scenario.simulation.dt / run.substeps as f64;
+    let t = run.substep_time();
     for b in &run.scenario.bodies {
-        let (Some(m), Some(h)) = (&b.motion, run.bodies.get(&b.name).and_then(|e| handles.get(*e).ok())) else {
+        let (Some(m), Some(handle)) = (&b.motion, run.bodies.get(&b.name).and_then(|e| handles.get(*e).ok())) else {
             continue;
         };
-        if let Some(rb) = ctx.rigidbody_set.bodies.get_mut(h.0) {
-            rb.set_next_kinematic_position(motion_pose(m, b.position, b.rotation, t + dt));
+        if let Some(rb) = ctx.rigidbody_set.bodies.get_mut(handle.0) {
+            rb.set_next_kinematic_position(motion_pose(m, b.position, b.rotation, t + h));
         }
     }
 }
@@ -260,6 +353,11 @@ fn sample(
     let Ok(ctx) = ctx.single() else {
         return;
     };
+    run.substep += 1;
+    if run.substep < run.substeps {
+        return;
+    }
+    run.substep = 0;
     run.steps += 1;
     run.time = run.steps as f64 * run.scenario.simulation.dt;
     let view = View::new(&run, &sims, &ropes, &ctx.rigidbody_set.bodies, &handles, &joint_handles);
@@ -373,6 +471,12 @@ impl ProbeSource for View<'_> {
 
     fn joint(&self, name: &str, quantity: Quantity) -> Probe {
         // Probes of other joints are refused by `add_scenario`.
-        self.rails.get(name).map_or(Probe::Scalar(f64::NAN), |c| probe::rail(c, quantity))
+        if let Some(c) = self.rails.get(name) {
+            return probe::rail(c, quantity);
+        }
+        match self.run.rapier_joints.iter().flatten().find(|j| j.name == name) {
+            Some(j) => probe::rapier_joint(j, self.bodies, quantity),
+            None => Probe::Scalar(f64::NAN),
+        }
     }
 }

@@ -4,9 +4,10 @@
 //! ([`ProbeSource`]); the values and their columns are computed here once,
 //! so the two give the same `results.csv` for the same state.
 
+use super::rapier::RapierJoint;
 use crate::cable::chain::IN_CHAIN;
 use crate::cable::{Cable, RopeView};
-use crate::scenario::{self, Component, ProbeTarget, Quantity};
+use crate::scenario::{self, Component, JointKind, ProbeTarget, Quantity};
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 
 /// One probe's value.
@@ -89,6 +90,20 @@ pub(crate) fn rail(cable: &Cable, quantity: Quantity) -> Probe {
             let axis = ch.link_rotation(0).expect(IN_CHAIN) * ch.joints()[0].axis;
             Probe::Vector(axis * (ch.joint_forces()[0] - ch.joints()[0].damping * cable.state.v[0]))
         }
+    }
+}
+
+/// A probe of a joint that rapier keeps: `position` the revolute angle
+/// (deg, unwrapped, 0 at t = 0) or the prismatic slide (m), `velocity` its
+/// rate, `force` the drive's force (N) or torque (N·m) along or about the
+/// world axis.
+pub(crate) fn rapier_joint(j: &RapierJoint, bodies: &rapier3d::prelude::RigidBodySet, quantity: Quantity) -> Probe {
+    let deg = if j.kind == JointKind::Revolute { 180.0 / std::f64::consts::PI } else { 1.0 };
+    match quantity {
+        Quantity::Position => Probe::Scalar(j.position(bodies) * deg),
+        Quantity::Velocity => Probe::Scalar(j.velocity(bodies) * deg),
+        // The drive force / torque (non-driven joints are refused).
+        _ => Probe::Vector(j.axis_world(bodies) * j.drive_force),
     }
 }
 

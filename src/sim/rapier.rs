@@ -56,6 +56,97 @@ pub(crate) struct RapierJoint {
     pub drive_force: f64,
 }
 
+impl RapierJoint {
+    /// The record of scenario joint `j`, rapier joint `handle` between
+    /// `bodies` (body1, body2) whose orientations at t = 0 are `r1`, `r2`.
+    pub fn new(j: &Joint, handle: rp::ImpulseJointHandle, bodies: [rp::RigidBodyHandle; 2], r1: DQuat, r2: DQuat) -> RapierJoint {
+        RapierJoint {
+            name: j.name.clone(),
+            handle,
+            kind: j.kind,
+            bodies,
+            anchors: [j.anchor1, j.anchor2],
+            axis: j.axis.unwrap_or(DVec3::X),
+            rel0: (r1.inverse() * r2).normalize(),
+            drive: j.drive.clone(),
+            angle: 0.0,
+            drive_force: 0.0,
+        }
+    }
+
+    /// World axis (body1's axis turned with body1).
+    pub fn axis_world(&self, bodies: &rp::RigidBodySet) -> DVec3 {
+        pose_of(bodies, self.bodies[0]).1 * self.axis
+    }
+
+    /// Revolute angle in (−π, π] from the bodies' orientations (twist of
+    /// the relative rotation since t = 0 about the axis).
+    fn raw_angle(&self, bodies: &rp::RigidBodySet) -> f64 {
+        let (_, r1) = pose_of(bodies, self.bodies[0]);
+        let (_, r2) = pose_of(bodies, self.bodies[1]);
+        let d = (r1.inverse() * r2) * self.rel0.inverse();
+        let twist = DVec3::new(d.x, d.y, d.z).dot(self.axis);
+        let a = 2.0 * twist.atan2(d.w);
+        if a > std::f64::consts::PI {
+            a - std::f64::consts::TAU
+        } else if a <= -std::f64::consts::PI {
+            a + std::f64::consts::TAU
+        } else {
+            a
+        }
+    }
+
+    /// Joint coordinate: revolute angle (rad, unwrapped), prismatic slide
+    /// (m): (anchor2 − anchor1) · axis in the world; 0 for the others.
+    pub fn position(&self, bodies: &rp::RigidBodySet) -> f64 {
+        match self.kind {
+            JointKind::Revolute => self.angle,
+            JointKind::Prismatic => {
+                let (p1, r1) = pose_of(bodies, self.bodies[0]);
+                let (p2, r2) = pose_of(bodies, self.bodies[1]);
+                ((p2 + r2 * self.anchors[1]) - (p1 + r1 * self.anchors[0])).dot(r1 * self.axis)
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Rate of [`position`](Self::position): rad/s or m/s.
+    pub fn velocity(&self, bodies: &rp::RigidBodySet) -> f64 {
+        let (p1, r1) = pose_of(bodies, self.bodies[0]);
+        let (p2, r2) = pose_of(bodies, self.bodies[1]);
+        let (v1, w1) = velocity_of(bodies, self.bodies[0]);
+        let (v2, w2) = velocity_of(bodies, self.bodies[1]);
+        let a = r1 * self.axis;
+        match self.kind {
+            JointKind::Revolute => (w2 - w1).dot(a),
+            JointKind::Prismatic => {
+                let (x1, x2) = (r1 * self.anchors[0], r2 * self.anchors[1]);
+                let (va, vb) = (v1 + w1.cross(x1), v2 + w2.cross(x2));
+                (vb - va).dot(a) + ((p2 + x2) - (p1 + x1)).dot(w1.cross(a))
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// After a rapier step: unwraps the revolute angle and reads a
+    /// velocity motor's force. Rapier sub-steps every step
+    /// (`num_solver_iterations`, each `h_sub` s); the motor impulse it
+    /// writes back is the last sub-step's, and acts on body2 with the
+    /// opposite sign.
+    pub fn after_step(&mut self, bodies: &rp::RigidBodySet, joints: &rp::ImpulseJointSet, h_sub: f64) {
+        if self.kind == JointKind::Revolute {
+            let raw = self.raw_angle(bodies);
+            let turns = ((self.angle - raw) / std::f64::consts::TAU).round();
+            self.angle = raw + turns * std::f64::consts::TAU;
+        }
+        if matches!(self.drive, Some(Drive::Velocity { .. })) {
+            let free = if self.kind == JointKind::Revolute { rp::JointAxis::AngX } else { rp::JointAxis::LinX };
+            let imp = joints.get(self.handle).map_or(0.0, |ij| ij.data.motors[free as usize].impulse);
+            self.drive_force = -(imp as f64) / h_sub;
+        }
+    }
+}
+
 /// Rapier bodies and joints of a scenario.
 pub(crate) struct RapierWorld {
     pub pw: rp::PhysicsWorld,
@@ -208,75 +299,9 @@ impl RapierWorld {
         let (h1, h2) = (b1.unwrap_or(self.ground), b2.unwrap_or(self.ground));
         let (_, r1) = self.pose_of(h1);
         let (_, r2) = self.pose_of(h2);
-        let axis = j.axis.unwrap_or(DVec3::X);
         let data = joint_data(j, r1, r2, dt);
         let handle = self.pw.insert_impulse_joint(h1, h2, data);
-        self.joints.push(RapierJoint {
-            name: j.name.clone(),
-            handle,
-            kind: j.kind,
-            bodies: [h1, h2],
-            anchors: [j.anchor1, j.anchor2],
-            axis,
-            rel0: (r1.inverse() * r2).normalize(),
-            drive: j.drive.clone(),
-            angle: 0.0,
-            drive_force: 0.0,
-        });
-    }
-
-    /// World axis of joint `j` (body1's axis turned with body1).
-    pub fn joint_axis(&self, j: &RapierJoint) -> DVec3 {
-        self.pose_of(j.bodies[0]).1 * j.axis
-    }
-
-    /// Revolute angle in (−π, π] from the bodies' orientations (twist of
-    /// the relative rotation since t = 0 about the axis).
-    fn raw_angle(&self, j: &RapierJoint) -> f64 {
-        let (_, r1) = self.pose_of(j.bodies[0]);
-        let (_, r2) = self.pose_of(j.bodies[1]);
-        let d = (r1.inverse() * r2) * j.rel0.inverse();
-        let twist = DVec3::new(d.x, d.y, d.z).dot(j.axis);
-        let a = 2.0 * twist.atan2(d.w);
-        if a > std::f64::consts::PI {
-            a - std::f64::consts::TAU
-        } else if a <= -std::f64::consts::PI {
-            a + std::f64::consts::TAU
-        } else {
-            a
-        }
-    }
-
-    /// Joint coordinate: revolute angle (rad, unwrapped), prismatic slide
-    /// (m): (anchor2 − anchor1) · axis in the world; 0 for the others.
-    pub fn joint_position(&self, j: &RapierJoint) -> f64 {
-        match j.kind {
-            JointKind::Revolute => j.angle,
-            JointKind::Prismatic => {
-                let (p1, r1) = self.pose_of(j.bodies[0]);
-                let (p2, r2) = self.pose_of(j.bodies[1]);
-                ((p2 + r2 * j.anchors[1]) - (p1 + r1 * j.anchors[0])).dot(r1 * j.axis)
-            }
-            _ => 0.0,
-        }
-    }
-
-    /// Rate of [`joint_position`](Self::joint_position): rad/s or m/s.
-    pub fn joint_velocity(&self, j: &RapierJoint) -> f64 {
-        let (p1, r1) = self.pose_of(j.bodies[0]);
-        let (p2, r2) = self.pose_of(j.bodies[1]);
-        let (v1, w1) = self.velocity_of(j.bodies[0]);
-        let (v2, w2) = self.velocity_of(j.bodies[1]);
-        let a = r1 * j.axis;
-        match j.kind {
-            JointKind::Revolute => (w2 - w1).dot(a),
-            JointKind::Prismatic => {
-                let (x1, x2) = (r1 * j.anchors[0], r2 * j.anchors[1]);
-                let (va, vb) = (v1 + w1.cross(x1), v2 + w2.cross(x2));
-                (vb - va).dot(a) + ((p2 + x2) - (p1 + x1)).dot(w1.cross(a))
-            }
-            _ => 0.0,
-        }
+        self.joints.push(RapierJoint::new(j, handle, [h1, h2], r1, r2));
     }
 
     /// Before a rapier step over `[t, t + dt]`: moves kinematic bodies to
@@ -294,7 +319,7 @@ impl RapierWorld {
             match j.drive.clone() {
                 Some(Drive::Force { force }) => {
                     let f = force.value_at(t + 0.5 * dt);
-                    let a = self.joint_axis(j);
+                    let a = j.axis_world(&self.pw.bodies);
                     let [h1, h2] = j.bodies;
                     if j.kind == JointKind::Revolute {
                         let imp = (a * f * dt).as_vec3();
@@ -341,19 +366,8 @@ impl RapierWorld {
         // impulse it writes back is the last sub-step's, and acts on body2
         // with the opposite sign.
         let h_sub = self.pw.integration_parameters.dt as f64 / self.pw.integration_parameters.num_solver_iterations.max(1) as f64;
-        for k in 0..self.joints.len() {
-            if self.joints[k].kind == JointKind::Revolute {
-                let raw = self.raw_angle(&self.joints[k]);
-                let j = &mut self.joints[k];
-                let prev = j.angle;
-                let turns = ((prev - raw) / std::f64::consts::TAU).round();
-                j.angle = raw + turns * std::f64::consts::TAU;
-            }
-            if matches!(self.joints[k].drive, Some(Drive::Velocity { .. })) {
-                let free = if self.joints[k].kind == JointKind::Revolute { rp::JointAxis::AngX } else { rp::JointAxis::LinX };
-                let imp = self.pw.impulse_joints.get(self.joints[k].handle).map_or(0.0, |ij| ij.data.motors[free as usize].impulse);
-                self.joints[k].drive_force = -(imp as f64) / h_sub;
-            }
+        for j in &mut self.joints {
+            j.after_step(&self.pw.bodies, &self.pw.impulse_joints, h_sub);
         }
         Ok(())
     }

@@ -126,7 +126,7 @@ use super::rapier::RapierWorld;
 use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
 use crate::coupling::{rail_drive, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
 use crate::integrate::{Scheme, SchemeParams, Substeps};
-use crate::scenario::{self, BodyKind, CableEnd, Drive, JointKind, Location, ProbeTarget, Quantity, Scenario, Shape};
+use crate::scenario::{self, BodyKind, CableEnd, Drive, Location, ProbeTarget, Quantity, Scenario, Shape};
 use glam::{DMat3, DVec3};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -615,12 +615,6 @@ impl World {
         (b.position_at(t), DMat3::from_quat(b.rotation_at(t)), v, w)
     }
 
-    /// Names of the prismatic joints of the trolleys the cables carry (the
-    /// rails whose coordinate is the chain's root sub-joint).
-    pub(crate) fn rails(&self) -> Vec<&str> {
-        self.names.iter().filter_map(|n| n.slide.as_ref().map(|(j, _)| j.as_str())).collect()
-    }
-
     /// Names of the cables.
     pub fn cable_names(&self) -> Vec<&str> {
         self.scenario.cables.iter().map(|c| c.name.as_str()).collect()
@@ -654,16 +648,7 @@ impl super::probe::ProbeSource for World {
         match (c, quantity) {
             (Some(c), q) => super::probe::rail(&c.cable, q),
             (None, q) => match self.rapier.joints.iter().find(|j| j.name == *name) {
-                // Rapier joint: revolute in degrees, prismatic in m.
-                Some(j) => {
-                    let deg = if j.kind == JointKind::Revolute { 180.0 / std::f64::consts::PI } else { 1.0 };
-                    match q {
-                        Quantity::Position => Probe::Scalar(self.rapier.joint_position(j) * deg),
-                        Quantity::Velocity => Probe::Scalar(self.rapier.joint_velocity(j) * deg),
-                        // The drive force / torque (non-driven joints are refused).
-                        _ => Probe::Vector(self.rapier.joint_axis(j) * j.drive_force),
-                    }
-                }
+                Some(j) => super::probe::rapier_joint(j, &self.rapier.pw.bodies, q),
                 None => Probe::Scalar(f64::NAN),
             },
         }
