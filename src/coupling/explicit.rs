@@ -4,9 +4,11 @@
 //! the body; and the drive of a trolley absorbed into a cable's chain.
 //! Used by the coupling core.
 
+use super::CoupledCable;
 use crate::cable::chain::{rotation_vector, BaseMotion, SampledMotion, IN_CHAIN};
 use crate::cable::Cable;
 use glam::{DMat3, DVec3};
+use rapier3d::prelude as rp;
 
 /// Pose and motion of a body's attachment point at the start of a step,
 /// copied into the cable's base motion or end-spring target ([`follow`]).
@@ -110,4 +112,46 @@ pub(crate) fn rail_drive(cable: &mut Cable, k: f64, c: f64, offset: f64, target_
         max_force.copysign(needed)
     };
     let _ = ch.set_joint_force(0, force);
+}
+
+/// The rapier motor of a trolley's prismatic joint (both runners: the
+/// plugin reads it from the joint component, `cablesim` builds it from a
+/// scenario `drive`, [`velocity_drive_motor`]), as a spring and damper
+/// on the chain's root sub-joint: `F = k (x_target − x) + c (v_target − v)`
+/// (with `AccelerationBased` motors, `k` and `c` times the trolley's mass,
+/// as rapier scales them by the body's mass), implicit in the cable solve;
+/// when the force this asks for now exceeds `max_force`, an explicit force
+/// of `max_force` toward the target instead. `offset` is the rapier joint
+/// coordinate at chain coordinate 0. Without a motor the root sub-joint is
+/// free.
+pub(crate) fn rail_motor(cc: &mut CoupledCable, motor: Option<rp::JointMotor>, offset: f64) {
+    let cable = &mut cc.cable;
+    let Some(m) = motor.filter(|m| m.stiffness != 0.0 || m.damping != 0.0) else {
+        rail_drive(cable, 0.0, 0.0, offset, 0.0, 0.0, f64::INFINITY);
+        return;
+    };
+    let scale = match m.model {
+        rp::MotorModel::AccelerationBased => cable.model.chain.joints()[0].link.map_or(0.0, |l| l.mass),
+        rp::MotorModel::ForceBased => 1.0,
+    };
+    let (k, c) = (m.stiffness as f64 * scale, m.damping as f64 * scale);
+    rail_drive(cable, k, c, offset, m.target_pos as f64, m.target_vel as f64, m.max_force as f64);
+}
+
+/// The rapier joint motor of a scenario velocity drive over a step of `h`
+/// s ([`set_velocity_drive`] on a joint's x axis), as a joint stores it.
+pub(crate) fn velocity_drive_motor(target: f64, max_force: f64, h: f64) -> rp::JointMotor {
+    let mut data = rp::GenericJoint::default();
+    set_velocity_drive(&mut data, rp::JointAxis::LinX, target, max_force, h);
+    data.motors[rp::JointAxis::LinX as usize]
+}
+
+/// Sets the velocity motor of a scenario velocity drive on `data`'s axis
+/// `axis` over a step of `h` s: target `target` (m/s or rad/s),
+/// acceleration-based damping `1/h` (the velocity error halves every
+/// step), saturating at `max_force` (N or N·m), in rapier's f32.
+pub(crate) fn set_velocity_drive(data: &mut rp::GenericJoint, axis: rp::JointAxis, target: f64, max_force: f64, h: f64) {
+    data.set_motor_model(axis, rp::MotorModel::AccelerationBased);
+    data.set_motor_velocity(axis, target as f32, (1.0 / h) as f32);
+    data.set_motor_max_force(axis, max_force as f32);
 }

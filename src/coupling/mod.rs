@@ -77,7 +77,7 @@
 
 mod explicit;
 
-pub(crate) use self::explicit::{follow, rail_drive, reaction, BodySample};
+pub(crate) use self::explicit::{follow, rail_motor, reaction, set_velocity_drive, velocity_drive_motor, BodySample};
 use crate::cable::chain::rotation_vector;
 use crate::cable::{
     BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeModel, RopeStart,

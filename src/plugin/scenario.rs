@@ -50,26 +50,32 @@
 //! joints rapier keeps are recorded as `cablesim` records them (unwrapped
 //! revolute angles, for their probes).
 //!
+//! Joint drives act as in `cablesim`: a `velocity` drive on a trolley's
+//! rail becomes the rail joint's motor, which the plugin reads (the law
+//! both runners share, `coupling::rail_motor`); the drives of joints rapier
+//! keeps are applied to rapier before its step by `cablesim`'s own code.
+//!
 //! **Not yet spawned** (refused with [`SimError::Unsupported`] naming the
-//! item): a joint `drive` (`cablesim` drives an absorbed trolley's rail in
-//! the chain with its own law, the plugin reads rapier's joint motor; the
-//! two must become one), and two joints on the same body2 (bevy_rapier
-//! holds one joint per entity). Everything `cablesim` refuses is refused
-//! here too, with the same message.
+//! item): a `force` table on a trolley's rail (`cablesim` applies it as the
+//! chain's joint force; the plugin drives a rail only through the joint's
+//! motor), and two joints on the same body2 (bevy_rapier holds one joint
+//! per entity). Everything `cablesim` refuses is refused here too, with the
+//! same message.
 
 use super::components::{BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CablePointLoad, CableRopeOf, CableSim};
 use super::{CableSettings, CableSystems};
 use crate::cable::{BodyInChain, Cable, RopeSection, RopeView};
+use crate::coupling::set_velocity_drive;
 use crate::coupling::Role;
 use crate::integrate::{Scheme, SchemeParams};
-use crate::scenario::{BodyKind, CableEnd, Location, Quantity, Scenario, Shape};
+use crate::scenario::{BodyKind, CableEnd, Drive, Location, Quantity, Scenario, Shape};
 use crate::sim::probe::{self, Probe, ProbeSource};
-use crate::sim::rapier::{joint_data, motion_pose, pose_of, rigid_energy, velocity_of, RapierJoint};
+use crate::sim::rapier::{drive_joints, joint_data, motion_pose, pose_of, rigid_energy, velocity_of, RapierJoint};
 use crate::sim::{body_motion, shape_inertia, SimError, World as SimWorld};
 use bevy::math::{DMat3, DQuat, DVec3};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier3d::rapier::dynamics::{RigidBodyHandle, RigidBodySet};
+use bevy_rapier3d::rapier::dynamics::{JointAxis, RigidBodyHandle, RigidBodySet};
 use std::collections::HashMap;
 use std::time::Duration;
 
@@ -103,6 +109,8 @@ pub struct ScenarioRun {
     /// The joints rapier keeps, as cablesim records them (unwrapped angles),
     /// once bevy_rapier has created them.
     rapier_joints: Option<Vec<RapierJoint>>,
+    /// The joints that are rails of trolleys the cables carry.
+    rails: Vec<String>,
 }
 
 impl ScenarioRun {
@@ -138,7 +146,12 @@ fn prepare(mut run: ResMut<ScenarioRun>, mut ctx: WriteRapierContext, handles: Q
             continue;
         };
         let (r1, r2) = (pose_of(bodies, h1).1, pose_of(bodies, h2).1);
-        records.push(RapierJoint::new(j, jh.0, [h1, h2], r1, r2));
+        let mut record = RapierJoint::new(j, jh.0, [h1, h2], r1, r2);
+        if run.rails.contains(&j.name) {
+            // Its drive acts in the chain (`drive_rails`), not in rapier.
+            record.drive = None;
+        }
+        records.push(record);
     }
     run.rapier_joints = Some(records);
 }
@@ -183,9 +196,6 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
     let file = scenario.file.display().to_string();
     let unsupported = |location: Location, what: String| SimError::Unsupported { file: file.clone(), location, what };
     let sim = &scenario.simulation;
-    if let Some(j) = scenario.joints.iter().find(|j| j.drive.is_some()) {
-        return Err(unsupported(j.location, format!("the `drive` of joint `{}` in a Bevy app (cablesim runs it)", j.name)));
-    }
     // bevy_rapier holds a joint on the entity of its body2 (one per entity).
     for (k, j) in scenario.joints.iter().enumerate() {
         if let Some(other) = scenario.joints[..k].iter().find(|o| o.body2 == j.body2) {
@@ -193,7 +203,15 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
         }
     }
     // Everything cablesim refuses, with its message.
-    SimWorld::new(scenario.clone())?;
+    let rails: Vec<String> = SimWorld::new(scenario.clone())?.rails().into_iter().map(String::from).collect();
+    // A force table on a trolley's rail acts in the chain as a joint force
+    // in cablesim; the plugin drives a rail only through the joint's motor.
+    if let Some(j) = scenario.joints.iter().find(|j| rails.contains(&j.name) && matches!(j.drive, Some(Drive::Force { .. }))) {
+        return Err(unsupported(
+            j.location,
+            format!("the `force` drive of joint `{}`, a trolley's rail, in a Bevy app (cablesim runs it; a `velocity` drive runs in both)", j.name),
+        ));
+    }
     let ic = &sim.integrator;
     let params = SchemeParams { beta: ic.beta, gamma: ic.gamma, theta: ic.theta, alpha: ic.alpha, rho_inf: ic.rho_inf, w: ic.w };
     let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
@@ -301,12 +319,14 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
         rows: Vec::new(),
         failed: None,
         rapier_joints: None,
+        rails,
     });
     app.add_systems(
         FixedUpdate,
         (
             prepare.after(PhysicsSet::SyncBackend).before(CableSystems::Init),
-            move_kinematic.after(CableSystems::Step).before(PhysicsSet::StepSimulation),
+            drive_rails.after(CableSystems::Init).before(CableSystems::Step),
+            (move_kinematic, drive_rapier_joints).chain().after(CableSystems::Step).before(PhysicsSet::StepSimulation),
             after_rapier_step.after(PhysicsSet::StepSimulation).before(CableSystems::WriteBodies),
             sample.in_set(CableSystems::Readout),
         ),
@@ -329,6 +349,34 @@ fn move_kinematic(run: Res<ScenarioRun>, mut ctx: WriteRapierContext, handles: Q
         if let Some(rb) = ctx.rigidbody_set.bodies.get_mut(handle.0) {
             rb.set_next_kinematic_position(motion_pose(m, b.position, b.rotation, t + h));
         }
+    }
+}
+
+/// Before the cables' step: the velocity drive of a trolley's rail becomes
+/// the rail joint's motor, which the plugin reads (the same motor `cablesim`
+/// gives the chain, [`crate::coupling::velocity_drive_motor`]).
+fn drive_rails(run: Res<ScenarioRun>, mut joints: Query<&mut ImpulseJoint>) {
+    let h = run.scenario.simulation.dt / run.substeps as f64;
+    let t = run.substep_time();
+    for j in run.scenario.joints.iter().filter(|j| run.rails.contains(&j.name)) {
+        let (Some(Drive::Velocity { velocity, max_force }), Some(mut joint)) = (&j.drive, run.joints.get(&j.name).and_then(|e| joints.get_mut(*e).ok())) else {
+            continue;
+        };
+        set_velocity_drive(&mut joint.data.as_mut().raw, JointAxis::LinX, velocity.value_at(t + h), *max_force, h);
+    }
+}
+
+/// Before rapier's step, after the kinematic bodies, as `cablesim` does:
+/// the drives of the joints rapier keeps.
+fn drive_rapier_joints(mut run: ResMut<ScenarioRun>, mut ctx: WriteRapierContext) {
+    let Ok(mut ctx) = ctx.single_mut() else {
+        return;
+    };
+    let h = run.scenario.simulation.dt / run.substeps as f64;
+    let t = run.substep_time();
+    let (bodies, impulse_joints) = (&mut ctx.rigidbody_set.bodies, &mut ctx.joints.impulse_joints);
+    if let Some(joints) = run.rapier_joints.as_mut() {
+        drive_joints(joints, bodies, impulse_joints, t, h);
     }
 }
 

@@ -5,11 +5,11 @@
 use super::components::{BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CableRopeOf, CableSim, CableState, CarriedBody};
 use super::CableSettings;
 use crate::cable::{LumpedBody, RopeBuilder};
-use crate::coupling::{self, rail_drive, Attach, BodyInputs, Built, CableSpec, CoupledCable, CouplingError, Role};
+use crate::coupling::{self, rail_motor, Attach, BodyInputs, Built, CableSpec, CoupledCable, CouplingError, Role};
 use crate::sim::{STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier3d::rapier::dynamics::{JointMotor, RigidBodyHandle};
+use bevy_rapier3d::rapier::dynamics::RigidBodyHandle;
 use glam::{DMat3, DVec3};
 use std::collections::HashMap;
 
@@ -215,28 +215,6 @@ fn refusal(e: &CouplingError, entity_of: &HashMap<RigidBodyHandle, Entity>, batc
     e.describe(&body, &|k| format!("cable {}", batch[k]))
 }
 
-/// The rapier motor of a trolley's prismatic joint, as a spring and damper
-/// on the chain's root sub-joint: `F = k (x_target − x) + c (v_target − v)`
-/// (with `AccelerationBased` motors, `k` and `c` times the trolley's mass,
-/// as rapier scales them by the body's mass), implicit in the cable solve;
-/// when the force this asks for now exceeds `max_force`, an explicit force
-/// of `max_force` toward the target instead. `offset` is the rapier joint
-/// coordinate at chain coordinate 0. Without a motor the root sub-joint is
-/// free.
-fn rail_motor(cc: &mut CoupledCable, motor: Option<JointMotor>, offset: f64) {
-    let cable = &mut cc.cable;
-    let Some(m) = motor.filter(|m| m.stiffness != 0.0 || m.damping != 0.0) else {
-        rail_drive(cable, 0.0, 0.0, offset, 0.0, 0.0, f64::INFINITY);
-        return;
-    };
-    let scale = match m.model {
-        MotorModel::AccelerationBased => cable.model.chain.joints()[0].link.map_or(0.0, |l| l.mass),
-        MotorModel::ForceBased => 1.0,
-    };
-    let (k, c) = (m.stiffness as f64 * scale, m.damping as f64 * scale);
-    rail_drive(cable, k, c, offset, m.target_pos as f64, m.target_vel as f64, m.max_force as f64);
-}
-
 /// What the user asks of a carried body through bevy_rapier's components.
 type InputComponents = (Option<&'static ExternalForce>, Option<&'static GravityScale>, Option<&'static Damping>);
 
@@ -285,9 +263,11 @@ pub(crate) fn step_cables(
             );
         }
         if let (Some(trolley), Some((_, Role::Trolley { offset, .. }))) = (sim.rail, sim.coupled.roles[0]) {
+            // The motor along the rail (a `PrismaticJoint`, or any joint
+            // whose free axis is its local x).
             let motor = joints.get(trolley).ok().and_then(|j| match &j.data {
                 TypedJoint::PrismaticJoint(pj) => pj.motor().copied(),
-                _ => None,
+                data => data.as_ref().motor(JointAxis::LinX).copied(),
             });
             rail_motor(&mut sim.coupled, motor, offset);
         }

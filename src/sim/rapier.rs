@@ -6,6 +6,7 @@
 //! Rapier works in f32; the poses, velocities and energies read back are
 //! converted to f64.
 
+use crate::coupling::set_velocity_drive;
 use crate::scenario::{BodyKind, Drive, Joint, JointKind, Motion, Shape};
 use glam::{DMat3, DQuat, DVec3};
 use rapier3d::prelude as rp;
@@ -217,11 +218,7 @@ pub(crate) fn joint_data(j: &Joint, r1: DQuat, r2: DQuat, dt: f64) -> rp::Generi
         data.set_limits(free, [lo as f32, hi as f32]);
     }
     if let Some(Drive::Velocity { velocity, max_force }) = &j.drive {
-        // Implicit velocity motor: the velocity error halves every frame
-        // (acceleration-based damping 1/dt), saturating at max_force.
-        data.set_motor_model(free, rp::MotorModel::AccelerationBased);
-        data.set_motor_velocity(free, velocity.value_at(dt) as f32, (1.0 / dt) as f32);
-        data.set_motor_max_force(free, *max_force as f32);
+        set_velocity_drive(&mut data, free, velocity.value_at(dt), *max_force, dt);
     }
     data
 }
@@ -230,6 +227,42 @@ pub(crate) fn joint_data(j: &Joint, r1: DQuat, r2: DQuat, dt: f64) -> rp::Generi
 /// `t`, in rapier's f32.
 pub(crate) fn motion_pose(m: &Motion, p0: DVec3, r0: DQuat, t: f64) -> rp::Pose {
     pose(m.position_at(t, p0), m.rotation_at(t) * r0)
+}
+
+/// Before a rapier step over `[t, t + dt]`: applies the force drives of
+/// the joints rapier keeps (value at t + dt/2) as impulses, and sets their
+/// velocity motors' targets (value at t + dt).
+pub(crate) fn drive_joints(joints: &mut [RapierJoint], bodies: &mut rp::RigidBodySet, impulse_joints: &mut rp::ImpulseJointSet, t: f64, dt: f64) {
+    for j in joints.iter_mut() {
+        let free = if j.kind == JointKind::Revolute { rp::JointAxis::AngX } else { rp::JointAxis::LinX };
+        match j.drive.clone() {
+            Some(Drive::Force { force }) => {
+                let f = force.value_at(t + 0.5 * dt);
+                let a = j.axis_world(bodies);
+                let [h1, h2] = j.bodies;
+                if j.kind == JointKind::Revolute {
+                    let imp = (a * f * dt).as_vec3();
+                    bodies[h2].apply_torque_impulse(imp, true);
+                    bodies[h1].apply_torque_impulse(-imp, true);
+                } else {
+                    // Equal and opposite at the joint points.
+                    let (p1, r1) = pose_of(bodies, h1);
+                    let (p2, r2) = pose_of(bodies, h2);
+                    let imp = (a * f * dt).as_vec3();
+                    let (x1, x2) = ((p1 + r1 * j.anchors[0]).as_vec3(), (p2 + r2 * j.anchors[1]).as_vec3());
+                    bodies[h2].apply_impulse_at_point(imp, x2, true);
+                    bodies[h1].apply_impulse_at_point(-imp, x1, true);
+                }
+                j.drive_force = f;
+            }
+            Some(Drive::Velocity { velocity, max_force }) => {
+                if let Some(ij) = impulse_joints.get_mut(j.handle, true) {
+                    set_velocity_drive(&mut ij.data, free, velocity.value_at(t + dt), max_force, dt);
+                }
+            }
+            None => {}
+        }
+    }
 }
 
 impl RapierWorld {
@@ -313,39 +346,7 @@ impl RapierWorld {
                 self.pw.bodies[b.handle].set_next_kinematic_position(motion_pose(m, *p0, *r0, t + dt));
             }
         }
-        for k in 0..self.joints.len() {
-            let j = &self.joints[k];
-            let free = if j.kind == JointKind::Revolute { rp::JointAxis::AngX } else { rp::JointAxis::LinX };
-            match j.drive.clone() {
-                Some(Drive::Force { force }) => {
-                    let f = force.value_at(t + 0.5 * dt);
-                    let a = j.axis_world(&self.pw.bodies);
-                    let [h1, h2] = j.bodies;
-                    if j.kind == JointKind::Revolute {
-                        let imp = (a * f * dt).as_vec3();
-                        self.pw.bodies[h2].apply_torque_impulse(imp, true);
-                        self.pw.bodies[h1].apply_torque_impulse(-imp, true);
-                    } else {
-                        // Equal and opposite at the joint points.
-                        let (p1, r1) = self.pose_of(h1);
-                        let (p2, r2) = self.pose_of(h2);
-                        let imp = (a * f * dt).as_vec3();
-                        let (x1, x2) = ((p1 + r1 * j.anchors[0]).as_vec3(), (p2 + r2 * j.anchors[1]).as_vec3());
-                        self.pw.bodies[h2].apply_impulse_at_point(imp, x2, true);
-                        self.pw.bodies[h1].apply_impulse_at_point(-imp, x1, true);
-                    }
-                    self.joints[k].drive_force = f;
-                }
-                Some(Drive::Velocity { velocity, max_force }) => {
-                    let target = velocity.value_at(t + dt) as f32;
-                    if let Some(ij) = self.pw.impulse_joints.get_mut(j.handle, true) {
-                        ij.data.set_motor_velocity(free, target, (1.0 / dt) as f32);
-                        ij.data.set_motor_max_force(free, max_force as f32);
-                    }
-                }
-                None => {}
-            }
-        }
+        drive_joints(&mut self.joints, &mut self.pw.bodies, &mut self.pw.impulse_joints, t, dt);
     }
 
     /// Steps rapier by its `dt`, then unwraps the revolute angles and reads

@@ -12,8 +12,10 @@
 //!   of exactly one cable, at no other cable end, whose only joint is one
 //!   `prismatic` joint to the world (a trolley on its rail) is a link of the
 //!   chain too, behind a prismatic sub-joint; a `drive` on that joint acts
-//!   on it (a force table, or a velocity motor: an implicit damper
-//!   `c (v_target − v)` with `c = m/(2 dt)`, saturating at `max_force`).
+//!   on it (a force table, or a velocity drive: rapier's joint motor law,
+//!   as the plugin reads it, [`crate::coupling`]'s `rail_motor`: an
+//!   implicit damper `c (v_target − v)` with `c = m_trolley/h`, saturating
+//!   at `max_force`).
 //!   Absorbed bodies stay rapier bodies (the coupling core puts them on the
 //!   chain's pose every sub-step; see [`crate::coupling`]); their rails'
 //!   drives act in the chain, not in rapier.
@@ -124,7 +126,7 @@
 use super::probe::Probe;
 use super::rapier::RapierWorld;
 use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
-use crate::coupling::{rail_drive, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
+use crate::coupling::{rail_motor, velocity_drive_motor, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
 use crate::integrate::{Scheme, SchemeParams, Substeps};
 use crate::scenario::{self, BodyKind, CableEnd, Drive, Location, ProbeTarget, Quantity, Scenario, Shape};
 use glam::{DMat3, DVec3};
@@ -546,7 +548,11 @@ impl World {
                         let _ = cc.cable.model.chain.set_joint_force(0, force.value_at(t + 0.5 * h));
                     }
                     Some((_, Some(Drive::Velocity { velocity, max_force }))) => {
-                        velocity_motor(&mut cc.cable, velocity.value_at(t + h), *max_force, h);
+                        // Rapier's joint motor, read by the plugin from the
+                        // joint component in the same way.
+                        if let Some((_, Role::Trolley { offset, .. })) = cc.roles[0] {
+                            rail_motor(cc, Some(velocity_drive_motor(velocity.value_at(t + h), *max_force, h)), offset);
+                        }
                     }
                     _ => {}
                 }
@@ -615,6 +621,13 @@ impl World {
         (b.position_at(t), DMat3::from_quat(b.rotation_at(t)), v, w)
     }
 
+    /// Names of the prismatic joints of the trolleys the cables carry (the
+    /// rails whose coordinate is the chain's root sub-joint; their drives
+    /// act in the chain).
+    pub(crate) fn rails(&self) -> Vec<&str> {
+        self.names.iter().filter_map(|n| n.slide.as_ref().map(|(j, _)| j.as_str())).collect()
+    }
+
     /// Names of the cables.
     pub fn cable_names(&self) -> Vec<&str> {
         self.scenario.cables.iter().map(|c| c.name.as_str()).collect()
@@ -653,15 +666,4 @@ impl super::probe::ProbeSource for World {
             },
         }
     }
-}
-
-/// A velocity-tracking motor on the chain's root prismatic sub-joint (a
-/// trolley drive), like rapier's joint motor: an implicit damper
-/// `F = c (v_target − v)` with `c = m_total / (2h)` (the error halves every
-/// step), switched to the constant force `±max_force` when the force it
-/// would need exceeds the limit. Sets the sub-joint's damping and drive
-/// force for the coming step.
-fn velocity_motor(cable: &mut Cable, target: f64, max_force: f64, h: f64) {
-    let total_mass: f64 = cable.model.chain.joints().iter().filter_map(|j| j.link.map(|m| m.mass)).sum();
-    rail_drive(cable, 0.0, total_mass / (2.0 * h), 0.0, 0.0, target, max_force);
 }
