@@ -27,6 +27,10 @@ fn rope_builder_rejects_bad_parameters_by_name() {
         (RopeBuilder::new(0.0, 10, section(), 0.02).start(pinned()), "length"),
         (RopeBuilder::new(-1.0, 10, section(), 0.02).start(pinned()), "length"),
         (RopeBuilder::new(20.0, 0, section(), 0.02).start(pinned()), "segments"),
+        // A huge size is refused before anything is allocated (2³¹ elements
+        // asked for 51 GB and aborted).
+        (RopeBuilder::new(20.0, bevy_rapier_cable::cable::MAX_SEGMENTS + 1, section(), 0.02).start(pinned()), "segments"),
+        (RopeBuilder::new(20.0, 1 << 31, section(), 0.02).start(pinned()), "segments"),
         (RopeBuilder::new(20.0, 10, RopeSection { ea: f64::NAN, ..section() }, 0.02).start(pinned()), "ea"),
         (RopeBuilder::new(20.0, 10, RopeSection { ei: -1.0, ..section() }, 0.02).start(pinned()), "ei"),
         (RopeBuilder::new(20.0, 10, section(), f64::INFINITY).start(pinned()), "diameter"),

@@ -68,7 +68,7 @@ fn negative_or_zero_length() {
 
 #[test]
 fn zero_segments() {
-    let e = check(&replace("segments = 10", "segments = 0"), 16, 12, "`segments` must be at least 1");
+    let e = check(&replace("segments = 10", "segments = 0"), 16, 12, "`segments` must be between 1 and 100000, found 0");
     assert!(e.to_string().contains("16 | segments = 0\n   |            ^"), "{e}");
 }
 
@@ -741,4 +741,28 @@ end = { body = "load", anchor = [0.0, 0.2, 0.0] }
             w.step().unwrap_or_else(|e| panic!("{e}"));
         }
     }
+}
+
+/// Sizes and run lengths that cannot be run are refused before anything is
+/// allocated or stepped, naming the field and the limit: 2³¹ segments
+/// aborted on a 51 GB allocation, `dt = 1e-12` hung.
+#[test]
+fn huge_sizes_and_endless_runs_are_refused() {
+    check(&replace("segments = 10", "segments = 2147483648"), 16, 12, "`segments` must be between 1 and 100000, found 2147483648");
+    check(&replace("segments = 10", "segments = 100001"), 16, 12, "between 1 and 100000");
+    parse(&replace("segments = 10", "segments = 100000"), "ok.toml").expect("the largest size is accepted");
+    let e = check(&replace("dt = 0.01", "dt = 1e-12"), 3, 6, "`dt` = 1e-12 s gives 1000000000000 steps over `duration` = 1 s");
+    assert!(e.message.contains("at most 100000000 can be run"), "{e}");
+    let e = check(&replace("dt = 0.01", "dt = 1e-7\nsubsteps = 20"), 3, 6, "with `substeps` = 20");
+    assert!(e.message.contains("200000000 steps"), "{e}");
+    parse(&replace("dt = 0.01", "dt = 1e-8"), "ok.toml").expect("10⁸ steps are accepted");
+}
+
+/// An `output_interval` just below `dt` is refused with values that can be
+/// told apart (they used to print as 0.016667 and 0.016667).
+#[test]
+fn output_interval_refusal_shows_distinguishable_values() {
+    let src = replace("dt = 0.01", "dt = 0.016666666666666666\noutput_interval = 0.01666666666666666");
+    let e = check(&src, 4, 19, "must be at least `dt` = 0.016666666666666666 s, found 0.01666666666666666 s");
+    println!("{e}");
 }

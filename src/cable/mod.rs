@@ -11,7 +11,7 @@ pub use self::chain::{
     SubJoint,
 };
 pub mod rope;
-pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeLayout, RopeModel, RopePart, RopeStart};
+pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeLayout, RopeModel, RopePart, RopeStart, MAX_SEGMENTS};
 #[allow(clippy::module_inception)]
 pub mod cable;
 #[cfg(test)]

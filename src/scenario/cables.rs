@@ -1,5 +1,6 @@
 //! Validation of `[[cable]]` (materials, ends, initial path) and `[[winch]]`.
 
+use crate::cable::MAX_SEGMENTS;
 use std::collections::HashMap;
 use std::ops::Range;
 
@@ -28,8 +29,10 @@ fn cable(ctx: &Ctx<'_>, raw: &S<RawCable>, bodies: &[Body], seen: &mut HashMap<S
     let o = o.as_str();
     let length = ctx.check(&r.length, o, "length", Rule::Positive, "m")?;
     let n = *r.segments.get_ref();
-    let segments =
-        u32::try_from(n).ok().filter(|n| *n >= 1).ok_or_else(|| ctx.err(r.segments.span(), format!("{o}: `segments` must be at least 1, found {n}")))?;
+    let segments = u32::try_from(n)
+        .ok()
+        .filter(|n| (1..=MAX_SEGMENTS as u32).contains(n))
+        .ok_or_else(|| ctx.err(r.segments.span(), format!("{o}: `segments` must be between 1 and {MAX_SEGMENTS}, found {n}")))?;
     let diameter = ctx.check(&r.diameter, o, "diameter", Rule::Positive, "m")?;
     let section = match &r.material {
         Some(m) => Some(

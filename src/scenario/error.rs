@@ -11,7 +11,7 @@ use super::span::{line_of, LineIndex, Location};
 /// `Display` renders it like rustc:
 ///
 /// ```text
-/// error: cable `main`: `segments` must be at least 1, found 0
+/// error: cable `main`: `segments` must be between 1 and 100000, found 0
 ///  --> crane.toml:12:12
 ///   |
 /// 12 | segments = 0

@@ -36,6 +36,7 @@ pub use self::types::{
     Body, BodyKind, Cable, CableEnd, CableSide, Drive, Environment, IntegratorChoice, Joint, JointKind, Motion, PointLoad, Scenario, Shape, Simulation,
     TimeSeries, Winch, INTEGRATOR_NAMES,
 };
+pub use self::validate::MAX_STEPS;
 
 /// Read and validate the scenario file at `path`.
 pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {

@@ -256,6 +256,10 @@ pub(crate) fn validate(ctx: &Ctx<'_>, file: &Path, raw: RawScenario) -> Res<Scen
     Ok(Scenario { file: file.to_path_buf(), simulation, bodies, joints, cables, environment, winches, probes })
 }
 
+/// Most steps (frames × sub-steps) a scenario may ask for: 10⁸, about a
+/// day of stepping a small scenario. More is refused before the run starts.
+pub const MAX_STEPS: u64 = 100_000_000;
+
 /// `[simulation]`.
 fn simulation(ctx: &Ctx<'_>, raw: &S<RawSimulation>) -> Res<Simulation> {
     let o = "[simulation]";
@@ -275,11 +279,26 @@ fn simulation(ctx: &Ctx<'_>, raw: &S<RawSimulation>) -> Res<Simulation> {
         }
         None => None,
     };
+    // A run that cannot finish is refused before it starts.
+    let steps = (duration / dt).ceil() * f64::from(substeps.unwrap_or(1));
+    if steps > MAX_STEPS as f64 {
+        return Err(ctx.err(
+            r.dt.span(),
+            format!(
+                "{o}: `dt` = {} s gives {} steps over `duration` = {} s{}; at most {MAX_STEPS} can be run: raise `dt` or shorten `duration`",
+                fmt_num(dt),
+                fmt_num(steps),
+                fmt_num(duration),
+                substeps.map_or(String::new(), |n| format!(" with `substeps` = {n}"))
+            ),
+        ));
+    }
     let output_interval = match &r.output_interval {
         Some(v) => {
             let x = ctx.check(v, o, "output_interval", Rule::Positive, "s")?;
             if x < dt {
-                return Err(ctx.err(v.span(), format!("{o}: `output_interval` must be at least `dt` = {} s, found {}", fmt_num(dt), fmt_num(x))));
+                // Full precision: the two may agree to the digits `fmt_num` shows.
+                return Err(ctx.err(v.span(), format!("{o}: `output_interval` must be at least `dt` = {dt} s, found {x} s")));
             }
             x
         }
