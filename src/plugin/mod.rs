@@ -69,6 +69,23 @@
 //!   EA/L_e`). Cables spawned in the same step are classified together. A
 //!   cable spawned later on a body another cable already carries is
 //!   refused.
+//!
+//! ## Despawning (logged through the `log` facade, as bevy_rapier does)
+//! * **A cable entity despawned** (or its [`CableSim`] removed): the bodies
+//!   it carried become ordinary rapier bodies again, as their components
+//!   say (`GravityScale`, `Damping`, `ExternalForce`, `Sleeping`; the
+//!   defaults where absent), keeping their velocity; a trolley's rail motor
+//!   acts in rapier again; the sling legs solved in its chain are released
+//!   (their [`CableRopeOf`], descriptor and state removed, so they are not
+//!   rebuilt from their initial path).
+//! * **A carried body despawned**: the cable is removed at the next fixed
+//!   step ([`CableSim`], its descriptor and state; the entity stays yours),
+//!   with a warning. It does not hold a phantom load.
+//! * **A sling leg despawned**: its whole island is removed (the carrying
+//!   cable and the other legs) and the body it carried falls free, with a
+//!   warning. Respawn the legs you keep to hang it again.
+//!
+//! Tested in `tests/plugin_lifecycle.rs`.
 
 mod components;
 pub mod scenario;
@@ -133,10 +150,12 @@ impl Plugin for CablePlugin {
         app.configure_sets(FixedUpdate, (CableSystems::Init, CableSystems::Step).chain().after(PhysicsSet::SyncBackend).before(PhysicsSet::StepSimulation));
         app.configure_sets(FixedUpdate, CableSystems::WriteBodies.after(PhysicsSet::StepSimulation).before(PhysicsSet::Writeback));
         app.configure_sets(FixedUpdate, CableSystems::Readout.after(PhysicsSet::Writeback));
+        app.init_resource::<systems::Legs>();
+        app.add_observer(systems::release_cable);
         app.add_systems(
             FixedUpdate,
             (
-                systems::init_cables.in_set(CableSystems::Init),
+                (systems::drop_orphans, systems::init_cables, systems::record_legs).chain().in_set(CableSystems::Init),
                 systems::step_cables.in_set(CableSystems::Step),
                 systems::write_bodies.in_set(CableSystems::WriteBodies),
                 systems::readout.in_set(CableSystems::Readout),

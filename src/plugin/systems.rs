@@ -322,3 +322,114 @@ pub(crate) fn readout(mut cables: Query<(&CableSim, &mut CableState)>, mut ropes
         }
     }
 }
+
+/// Which cable entity's chain solves each sling leg ([`CableRopeOf`]), kept
+/// so that a despawned leg can still be traced to its island.
+#[derive(Resource, Debug, Default)]
+pub(crate) struct Legs(pub(crate) HashMap<Entity, Entity>);
+
+/// Records the legs of new islands (after [`init_cables`]' commands).
+pub(crate) fn record_legs(mut legs: ResMut<Legs>, new: Query<(Entity, &CableRopeOf), Added<CableRopeOf>>) {
+    for (e, of) in &new {
+        legs.0.insert(e, of.cable);
+    }
+}
+
+/// What bevy_rapier's components ask of a body once no cable carries it.
+type ReleaseComponents = (Option<&'static GravityScale>, Option<&'static Damping>, Option<&'static ExternalForce>, Option<&'static Sleeping>);
+
+/// A cable's [`CableSim`] is going (the cable entity despawned, or the
+/// plugin removing it because a body it carries was despawned): the bodies
+/// it carried become ordinary rapier bodies again, as their components say
+/// (gravity scale, damping, external force, sleeping; the defaults where a
+/// component is absent; gyroscopic torques on, rapier's default), a
+/// trolley's rail motor acts in rapier again, and the sling legs solved in
+/// its chain are released (their descriptors removed, so they are not
+/// rebuilt from their initial path). Logged.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn release_cable(
+    remove: On<Remove, CableSim>,
+    sims: Query<&CableSim>,
+    mut ctx: WriteRapierContext,
+    handles: Query<&RapierRigidBodyHandle>,
+    components: Query<ReleaseComponents>,
+    mut joints: Query<&mut ImpulseJoint>,
+    mut legs: ResMut<Legs>,
+    mut commands: Commands,
+) {
+    let cable = remove.entity;
+    let Ok(sim) = sims.get(cable) else {
+        return;
+    };
+    let Ok(mut ctx) = ctx.single_mut() else {
+        return;
+    };
+    let mut released = Vec::new();
+    for (be, kind) in &sim.bodies {
+        let CarriedBody::Lumped(_) = kind else { continue };
+        let Some(rb) = handles.get(*be).ok().and_then(|h| ctx.rigidbody_set.bodies.get_mut(h.0)) else {
+            continue;
+        };
+        let (scale, damping, force, sleeping) = components.get(*be).unwrap_or((None, None, None, None));
+        rb.set_gravity_scale(scale.map_or(1.0, |s| s.0), true);
+        rb.set_linear_damping(damping.map_or(0.0, |d| d.linear_damping));
+        rb.set_angular_damping(damping.map_or(0.0, |d| d.angular_damping));
+        rb.reset_forces(true);
+        rb.reset_torques(true);
+        if let Some(f) = force {
+            rb.add_force(f.force, true);
+            rb.add_torque(f.torque, true);
+        }
+        rb.enable_gyroscopic_forces(true);
+        let act = rb.activation_mut();
+        let default = bevy_rapier3d::rapier::dynamics::RigidBodyActivation::active();
+        act.normalized_linear_threshold = sleeping.map_or(default.normalized_linear_threshold, |s| s.normalized_linear_threshold);
+        act.angular_threshold = sleeping.map_or(default.angular_threshold, |s| s.angular_threshold);
+        released.push(*be);
+    }
+    if let Some(rail) = sim.rail {
+        // bevy_rapier writes the joint (with its motor) into rapier again.
+        if let Ok(mut j) = joints.get_mut(rail) {
+            j.set_changed();
+        }
+    }
+    let grafted: Vec<Entity> = legs.0.iter().filter(|(_, c)| **c == cable).map(|(l, _)| *l).collect();
+    for leg in &grafted {
+        legs.0.remove(leg);
+        if let Ok(mut e) = commands.get_entity(*leg) {
+            e.remove::<(CableRopeOf, CableDescriptor, CableState)>();
+        }
+    }
+    log::info!("cable {cable} removed: bodies {released:?} are rapier bodies again, sling legs {grafted:?} released");
+}
+
+/// Cables whose carried body was despawned, or one of whose sling legs
+/// was: the cable is removed ([`CableSim`] and its descriptor, so that it is
+/// not rebuilt; [`release_cable`] frees the rest), with a warning. A cable
+/// cannot hold a phantom load.
+pub(crate) fn drop_orphans(
+    mut commands: Commands,
+    cables: Query<(Entity, &CableSim)>,
+    exists: Query<(), With<RigidBody>>,
+    mut removed_legs: RemovedComponents<CableRopeOf>,
+    entities: Query<Entity>,
+    mut legs: ResMut<Legs>,
+) {
+    for (cable, sim) in &cables {
+        if let Some((gone, _)) = sim.bodies.iter().find(|(b, kind)| matches!(kind, CarriedBody::Lumped(_)) && exists.get(*b).is_err()) {
+            log::warn!("cable {cable}: its carried body {gone} was despawned; the cable is removed (despawn or respawn the cable entity yourself to keep a rope there)");
+            commands.entity(cable).remove::<(CableSim, CableDescriptor, CableState)>();
+        }
+    }
+    for leg in removed_legs.read() {
+        if entities.contains(leg) {
+            continue;
+        }
+        if let Some(carrier) = legs.0.remove(&leg) {
+            if cables.contains(carrier) {
+                log::warn!("sling leg {leg} was despawned: its island (cable {carrier} and its other legs) is removed and the bodies it carried are released");
+                commands.entity(carrier).remove::<(CableSim, CableDescriptor, CableState)>();
+            }
+        }
+    }
+}

@@ -1,0 +1,103 @@
+//! Despawning in a Bevy app (issue 11 "Lifecycle", and the guide's
+//! newcomer failure): a cable whose carried body is despawned is removed
+//! (it cannot hold a phantom load); a despawned cable gives its bodies back
+//! to rapier as their components say; a despawned sling leg releases its
+//! island. Nothing panics.
+
+#[path = "common/plugin_app.rs"]
+mod plugin_app;
+use bevy::prelude::*;
+use bevy_rapier3d::prelude::*;
+use bevy_rapier_cable::cable::preset;
+use bevy_rapier_cable::plugin::*;
+
+const DT: f32 = 1.0 / 60.0;
+const G: f32 = 9.81;
+
+fn rope(start: CableAnchor, end: CableAnchor) -> CableDescriptor {
+    CableDescriptor::new(5.0, 20, preset("steel_wire_rope_6x36_iwrc", 0.016).unwrap(), 0.016, start, end)
+}
+
+fn hang(app: &mut App, extra: impl Bundle) -> (Entity, Entity) {
+    let w = app.world_mut();
+    let payload = w
+        .spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -5.2, 0.0), Collider::ball(0.2), ColliderMassProperties::Mass(200.0), Velocity::default(), extra))
+        .id();
+    let cable =
+        w.spawn(rope(CableAnchor::World { point: Vec3::ZERO, clamp: false }, CableAnchor::Body { entity: payload, anchor: Vec3::Y * 0.2, clamp: false })).id();
+    (payload, cable)
+}
+
+fn run(app: &mut App, frames: usize) {
+    for _ in 0..frames {
+        app.update();
+    }
+}
+
+#[test]
+fn a_cable_whose_payload_is_despawned_is_removed() {
+    let mut app = plugin_app::headless_app(DT);
+    let (payload, cable) = hang(&mut app, ());
+    run(&mut app, 30);
+    assert!(app.world().get::<CableSim>(cable).is_some());
+    assert!(app.world().get::<CableState>(cable).unwrap().tensions[0] > 1900.0, "the rope holds the payload");
+    app.world_mut().despawn(payload);
+    run(&mut app, 2);
+    assert!(app.world().get::<CableSim>(cable).is_none(), "the cable still holds a despawned payload");
+    assert!(app.world().get::<CableDescriptor>(cable).is_none(), "it would be rebuilt");
+    assert!(app.world().get_entity(cable).is_ok(), "the entity itself stays the user's");
+    run(&mut app, 10);
+}
+
+#[test]
+fn a_despawned_cable_gives_its_payload_back_to_rapier_with_its_gravity_scale() {
+    for scale in [1.0f32, 0.5] {
+        let mut app = plugin_app::headless_app(DT);
+        let (payload, cable) = hang(&mut app, GravityScale(scale));
+        run(&mut app, 30);
+        let v0 = app.world().get::<Velocity>(payload).unwrap().linear;
+        assert!(v0.length() < 0.05, "hanging at rest: {v0}");
+        app.world_mut().despawn(cable);
+        run(&mut app, 30);
+        let v = app.world().get::<Velocity>(payload).unwrap().linear;
+        // Free fall for 30 steps of DT under scale·g (rapier's symplectic Euler
+        // gives exactly n·h·g on the velocity).
+        let expected = v0.y - scale * G * 30.0 * DT;
+        println!("gravity scale {scale}: velocity after 0.5 s of free fall {v} (expected y {expected})");
+        assert!((v.y - expected).abs() < 1e-3 * expected.abs() && v.x.abs() < 1e-4, "scale {scale}: {v} against {expected}");
+    }
+}
+
+/// A payload hanging on two legs from (±3, 0, 0): (app, payload, leg a,
+/// leg b), run for 0.5 s. Leg a carries the payload, b is grafted onto it.
+fn sling() -> (App, Entity, Entity, Entity) {
+    let mut app = plugin_app::headless_app(DT);
+    let w = app.world_mut();
+    let payload =
+        w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -4.0, 0.0), Collider::ball(0.2), ColliderMassProperties::Mass(200.0), Velocity::default())).id();
+    let leg = |x: f32| {
+        rope(CableAnchor::World { point: Vec3::new(x, 0.0, 0.0), clamp: false }, CableAnchor::Body { entity: payload, anchor: Vec3::ZERO, clamp: false })
+    };
+    let a = w.spawn(leg(-3.0)).id();
+    let b = w.spawn(leg(3.0)).id();
+    run(&mut app, 30);
+    assert!(app.world().get::<CableSim>(a).is_some() && app.world().get::<CableRopeOf>(b).is_some(), "one island: a carries, b is grafted");
+    (app, payload, a, b)
+}
+
+#[test]
+fn a_despawned_sling_leg_releases_its_island() {
+    let (mut app, payload, a, b) = sling();
+    app.world_mut().despawn(b);
+    run(&mut app, 30);
+    assert!(app.world().get::<CableSim>(a).is_none() && app.world().get::<CableDescriptor>(a).is_none(), "the island was not released");
+    let v = app.world().get::<Velocity>(payload).unwrap().linear;
+    assert!(v.y < -0.9 * G * 29.0 * DT, "the payload does not fall freely: {v}");
+    // The other way round: despawning the carrying leg releases the grafted one.
+    let (mut app, payload, a, b) = sling();
+    app.world_mut().despawn(a);
+    run(&mut app, 30);
+    assert!(app.world().get::<CableRopeOf>(b).is_none() && app.world().get::<CableDescriptor>(b).is_none(), "the grafted leg was not released");
+    let v = app.world().get::<Velocity>(payload).unwrap().linear;
+    assert!(v.y < -0.9 * G * 29.0 * DT, "the payload does not fall freely: {v}");
+}
