@@ -60,3 +60,57 @@ fn divergence_exits_3_and_keeps_the_rows() {
     let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
     assert!(csv.lines().count() >= 2, "rows up to the failure are kept");
 }
+
+/// A second run into the same folder without `--plot` leaves no stale plot
+/// of the first; results.csv holds the second run's rows only.
+#[test]
+fn a_rerun_removes_the_earlier_runs_files() {
+    let out = tmp("rerun");
+    let st = cablesim().args(["run", "assets/scenarios/catenary.toml", "--plot", "--quiet", "--out"]).arg(&out).status().unwrap();
+    assert_eq!(st.code(), Some(0));
+    assert!(out.join("plot.png").exists());
+    let first = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let st = cablesim().args(["run", "assets/scenarios/catenary.toml", "--quiet", "--out"]).arg(&out).status().unwrap();
+    assert_eq!(st.code(), Some(0));
+    assert!(!out.join("plot.png").exists(), "a stale plot.png of the earlier run is left");
+    assert_eq!(std::fs::read_to_string(out.join("results.csv")).unwrap(), first, "the same run writes the same rows");
+}
+
+/// An output folder that cannot be created (a file is in the way) exits
+/// with the documented status 4 and says which path.
+#[test]
+fn an_output_folder_that_cannot_be_made_exits_4() {
+    let dir = tmp("blocked");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("a_file");
+    std::fs::write(&file, "x").unwrap();
+    let o = cablesim().args(["run", "assets/scenarios/catenary.toml", "--quiet", "--out"]).arg(file.join("out")).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(4), "{err}");
+    assert!(err.contains("cannot create") && err.contains("a_file"), "{err}");
+}
+
+/// results.csv grows while the run goes: a run killed half-way keeps the
+/// rows it made (they used to be written only at the end).
+#[test]
+fn an_interrupted_run_keeps_its_rows() {
+    let out = tmp("interrupted");
+    let mut child = cablesim().args(["run", "assets/scenarios/perf_swing_1000.toml", "--quiet", "--out"]).arg(&out).spawn().unwrap();
+    let csv = out.join("results.csv");
+    let started = std::time::Instant::now();
+    let mut rows_seen = 0;
+    while started.elapsed().as_secs() < 60 {
+        rows_seen = std::fs::read_to_string(&csv).map_or(0, |s| s.lines().count().saturating_sub(1));
+        if rows_seen >= 3 {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let still_running = child.try_wait().unwrap().is_none();
+    child.kill().ok();
+    child.wait().ok();
+    assert!(still_running, "the run ended before it was interrupted: this check needs a longer scenario");
+    assert!(rows_seen >= 3, "no rows on disk while the run was going ({rows_seen})");
+    let kept = std::fs::read_to_string(&csv).unwrap();
+    assert!(kept.starts_with("time,") && kept.lines().count() > 3, "{kept}");
+}

@@ -101,3 +101,18 @@ fn a_despawned_sling_leg_releases_its_island() {
     let v = app.world().get::<Velocity>(payload).unwrap().linear;
     assert!(v.y < -0.9 * G * 29.0 * DT, "the payload does not fall freely: {v}");
 }
+
+/// Editing a built cable's descriptor is ignored (with a logged warning):
+/// the running cable keeps its elements and its state, nothing panics.
+#[test]
+fn an_edit_after_spawning_is_ignored() {
+    let mut app = plugin_app::headless_app(DT);
+    let (_, cable) = hang(&mut app, ());
+    run(&mut app, 10);
+    let before = app.world().get::<CableState>(cable).unwrap().nodes.len();
+    app.world_mut().get_mut::<CableDescriptor>(cable).unwrap().segments = 7;
+    run(&mut app, 10);
+    let st = app.world().get::<CableState>(cable).unwrap();
+    assert_eq!((before, st.nodes.len()), (21, 21), "the edit was applied or the cable lost");
+    assert!(app.world().get::<CableSim>(cable).is_some() && st.tensions[0] > 1900.0);
+}

@@ -7,7 +7,12 @@
 //! ```
 //! Exit status: 0 success, 2 invalid file (message with file:line:col),
 //! 3 the simulation diverged (the rows computed so far are still written),
-//! 1 anything else (I/O).
+//! 4 the output folder or its files cannot be created or written, 1 the
+//! viewer (not built yet). Usage errors are clap's (2).
+//!
+//! `run` writes `results.csv` row by row as the run goes (an interrupted
+//! run keeps its rows), and first removes the `results.csv`,
+//! `summary.json` and `plot.png` of an earlier run in the same folder.
 
 use bevy_rapier_cable::output::Recorder;
 use bevy_rapier_cable::scenario;
@@ -18,7 +23,12 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(name = "cablesim", version, about = "Run wire-rope scenario files (bevy_rapier_cable)")]
+#[command(
+    name = "cablesim",
+    version,
+    about = "Run wire-rope scenario files (bevy_rapier_cable)",
+    after_help = "Exit status: 0 success, 2 invalid scenario file, 3 the simulation diverged (rows so far written), 4 output folder or files cannot be written."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -76,6 +86,10 @@ fn main() -> ExitCode {
     }
 }
 
+/// Exit status when the output folder or its files cannot be created or
+/// written (0: done, 2: invalid scenario, 3: diverged, rows kept).
+const EXIT_OUTPUT: u8 = 4;
+
 /// Loads and builds a scenario; on failure prints the error and returns exit status 2.
 fn load(file: &Path) -> Result<(scenario::Scenario, World), ExitCode> {
     let sc = scenario::load(file).map_err(|e| {
@@ -101,7 +115,18 @@ fn run(file: &Path, out: Option<PathBuf>, plot: bool, quiet: bool) -> ExitCode {
     let dir = out.unwrap_or_else(|| PathBuf::from("out").join(stem));
     if let Err(e) = std::fs::create_dir_all(&dir) {
         eprintln!("error: cannot create {}: {e}", dir.display());
-        return ExitCode::from(1);
+        return ExitCode::from(EXIT_OUTPUT);
+    }
+    // Files of an earlier run would be mistaken for this one's (a plot
+    // left from a run with --plot, a summary of a longer run).
+    for name in ["results.csv", "summary.json", "plot.png"] {
+        match std::fs::remove_file(dir.join(name)) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                eprintln!("error: cannot remove the earlier {}: {e}", dir.join(name).display());
+                return ExitCode::from(EXIT_OUTPUT);
+            }
+            _ => {}
+        }
     }
     let sim = &sc.simulation;
     let frames = (sim.duration / sim.dt - 1e-9).ceil().max(0.0) as u64;
@@ -110,11 +135,20 @@ fn run(file: &Path, out: Option<PathBuf>, plot: bool, quiet: bool) -> ExitCode {
     let mut row = Vec::new();
     let bar = progress_bar(frames, quiet);
     let started = Instant::now();
+    // results.csv is written as rows are made: an interrupted run keeps them.
+    let mut csv = match rec.stream_csv(&dir.join("results.csv")) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_OUTPUT);
+        }
+    };
+    let mut record = |rec: &mut Recorder, t: f64, row: &[f64]| rec.push_row(t, row).and_then(|()| csv.append(t, row));
     world.sample(&mut row);
     let mut failure = None;
-    if let Err(e) = rec.push_row(0.0, &row) {
+    if let Err(e) = record(&mut rec, 0.0, &row) {
         eprintln!("error: {e}");
-        return ExitCode::from(1);
+        return ExitCode::from(EXIT_OUTPUT);
     }
     for k in 1..=frames {
         if let Err(e) = world.step() {
@@ -123,9 +157,9 @@ fn run(file: &Path, out: Option<PathBuf>, plot: bool, quiet: bool) -> ExitCode {
         }
         if k % every == 0 || k == frames {
             world.sample(&mut row);
-            if let Err(e) = rec.push_row(world.time, &row) {
+            if let Err(e) = record(&mut rec, world.time, &row) {
                 eprintln!("error: {e}");
-                return ExitCode::from(1);
+                return ExitCode::from(EXIT_OUTPUT);
             }
         }
         if let Some(b) = &bar {
@@ -145,7 +179,7 @@ fn run(file: &Path, out: Option<PathBuf>, plot: bool, quiet: bool) -> ExitCode {
         return ExitCode::from(3);
     }
     if written.is_err() {
-        return ExitCode::from(1);
+        return ExitCode::from(EXIT_OUTPUT);
     }
     if !quiet {
         let (newton, _) = world.work();
@@ -172,7 +206,6 @@ fn run(file: &Path, out: Option<PathBuf>, plot: bool, quiet: bool) -> ExitCode {
 }
 
 fn write_outputs(rec: &Recorder, dir: &Path, plot: bool, steps: u64, simulated: f64, wall: f64) -> Result<(), bevy_rapier_cable::output::OutputError> {
-    rec.write_csv(&dir.join("results.csv"))?;
     rec.write_summary(&dir.join("summary.json"), steps, simulated, wall)?;
     if plot {
         rec.write_plot(&dir.join("plot.png"), &rec.default_panels())?;

@@ -12,6 +12,7 @@ use thiserror::Error;
 
 /// Why a cable step failed.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum CableError {
     /// The integrator failed (Newton, solve, explicit step limit).
     #[error(transparent)]

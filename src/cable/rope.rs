@@ -31,6 +31,7 @@ pub const ELEMENT_DOFS: usize = 6;
 
 /// Errors building a rope.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum RopeError {
     /// A parameter is out of range or not finite.
     #[error("rope parameter `{name}` = {value} is invalid: {reason}")]

@@ -189,6 +189,7 @@ impl Default for BodyInputs {
 
 /// Why a cable cannot be built or coupled.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum CouplingError {
     /// A handle does not name a rapier body.
     #[error("the cable's {end} is attached to a body that is not in rapier's body set")]

@@ -14,6 +14,7 @@ use super::system::{SecondOrderSystem, SystemError};
 
 /// Why a [`DenseSystem`] could not be built.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum DenseSystemError {
     /// A matrix or vector has the wrong size.
     #[error("{what} has {got} entries, expected {expected}")]

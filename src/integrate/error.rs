@@ -9,6 +9,7 @@ use super::system::SystemError;
 /// Why a step (or the initial state) could not be computed. On any error
 /// [`Integrator::step`](super::Integrator::step) leaves the state as it was.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum IntegrateError {
     /// Newton did not converge within its iteration limit even after the
     /// sub-step fallback.

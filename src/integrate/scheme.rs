@@ -126,6 +126,7 @@ pub struct SchemeParams {
 
 /// Why a scheme could not be built from a name and parameters.
 #[derive(Clone, Debug, PartialEq, Error)]
+#[non_exhaustive]
 pub enum SchemeError {
     /// The name is not one of [`Scheme::NAMES`].
     #[error("unknown integrator `{name}`; expected one of: {}", Scheme::NAMES.join(", "))]

@@ -6,6 +6,7 @@ use thiserror::Error;
 
 /// Why a system could not evaluate its residual or solve its tangent.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum SystemError {
     /// The effective (tangent) matrix is singular or not positive at some pivot.
     #[error("singular effective matrix at coordinate {index} (pivot {pivot:e})")]

@@ -15,6 +15,7 @@ pub use self::summary::ColumnStats;
 
 /// An error while writing a result file.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum OutputError {
     /// The file could not be created or written.
     #[error("cannot write {}: {source}", path.display())]
@@ -69,6 +70,26 @@ pub enum OutputError {
         /// Number of columns.
         columns: usize,
     },
+}
+
+/// `results.csv` written row by row ([`Recorder::stream_csv`]).
+#[derive(Debug)]
+pub struct CsvStream {
+    w: csv::Writer<std::fs::File>,
+    path: PathBuf,
+}
+
+impl CsvStream {
+    /// Writes the row `time, values…` and flushes it to the file.
+    pub fn append(&mut self, time: f64, values: &[f64]) -> Result<(), OutputError> {
+        let record = std::iter::once(time).chain(values.iter().copied()).map(|x| x.to_string());
+        self.w.write_record(record).map_err(|source| OutputError::Csv { path: self.path.clone(), source })?;
+        self.flush()
+    }
+
+    fn flush(&mut self) -> Result<(), OutputError> {
+        self.w.flush().map_err(|source| OutputError::Io { path: self.path.clone(), source })
+    }
 }
 
 /// Rows of recorded values against time.
@@ -158,6 +179,20 @@ impl Recorder {
             w.write_record(row.iter().map(|x| x.to_string())).map_err(csv_err)?;
         }
         w.flush().map_err(|source| OutputError::Io { path: path.to_path_buf(), source })
+    }
+
+    /// Starts `results.csv` at `path` for streaming: writes the header now
+    /// and each row as it is appended ([`CsvStream::append`]), so an
+    /// interrupted run keeps the rows made so far. Same format as
+    /// [`Recorder::write_csv`].
+    pub fn stream_csv(&self, path: &Path) -> Result<CsvStream, OutputError> {
+        let csv_err = |source| OutputError::Csv { path: path.to_path_buf(), source };
+        let mut w = csv::Writer::from_path(path).map_err(csv_err)?;
+        let header = std::iter::once("time").chain(self.columns.iter().map(String::as_str));
+        w.write_record(header).map_err(csv_err)?;
+        let mut stream = CsvStream { w, path: path.to_path_buf() };
+        stream.flush()?;
+        Ok(stream)
     }
 
     /// Write `summary.json`: min/max/mean/final per column, the number of

@@ -85,6 +85,11 @@
 //!   cable and the other legs) and the body it carried falls free, with a
 //!   warning. Respawn the legs you keep to hang it again.
 //!
+//!
+//! **Edits after spawning**: a [`CableDescriptor`] changed after its cable
+//! was built is ignored, with a warning (despawn the cable and spawn a new
+//! one to change it).
+//!
 //! Tested in `tests/plugin_lifecycle.rs`.
 
 mod components;
@@ -155,7 +160,7 @@ impl Plugin for CablePlugin {
         app.add_systems(
             FixedUpdate,
             (
-                (systems::drop_orphans, systems::init_cables, systems::record_legs).chain().in_set(CableSystems::Init),
+                (systems::drop_orphans, systems::refuse_edits, systems::init_cables, systems::record_legs).chain().in_set(CableSystems::Init),
                 systems::step_cables.in_set(CableSystems::Step),
                 systems::write_bodies.in_set(CableSystems::WriteBodies),
                 systems::readout.in_set(CableSystems::Readout),

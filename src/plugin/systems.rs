@@ -433,3 +433,20 @@ pub(crate) fn drop_orphans(
         }
     }
 }
+
+/// A cable's descriptor with the change ticks of its build.
+type EditedCable = (Entity, Ref<'static, CableDescriptor>, Option<Ref<'static, CableSim>>, Option<Ref<'static, CableRopeOf>>);
+
+/// A [`CableDescriptor`] edited after its cable was built: the edit is
+/// refused with a warning (the running cable keeps its state; despawn the
+/// entity and spawn a new one to change it).
+pub(crate) fn refuse_edits(edited: Query<EditedCable, Changed<CableDescriptor>>, ticks: bevy::ecs::system::SystemChangeTick) {
+    for (e, desc, sim, leg) in &edited {
+        let Some(built) = sim.map(|s| s.added()).or_else(|| leg.map(|l| l.added())) else {
+            continue;
+        };
+        if desc.last_changed().is_newer_than(built, ticks.this_run()) {
+            log::warn!("cable {e}: its CableDescriptor was changed after the cable was built; the change is ignored (despawn the cable and spawn a new one)");
+        }
+    }
+}

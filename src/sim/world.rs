@@ -136,6 +136,7 @@ use thiserror::Error;
 
 /// Why a scenario cannot be run or stopped.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum SimError {
     /// The scenario uses something this runner does not simulate yet.
     #[error("{file}:{location}: {what} is not supported yet")]

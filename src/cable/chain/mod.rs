@@ -52,6 +52,7 @@ struct SlotKey {
 /// the chain's end, or a topology change that would cut through something
 /// (a load, an anchor, a rotation spring, a limb).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum ChainError {
     /// `what` refers to sub-joint `index`, which the chain does not have.
     #[error("{what} refers to sub-joint {index}, but the chain has {len} sub-joints")]

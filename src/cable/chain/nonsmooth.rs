@@ -159,6 +159,7 @@ impl Chain {
 
 /// Why a static solve failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum StaticError {
     /// The tangent solve failed.
     #[error(transparent)]
