@@ -116,3 +116,19 @@ fn an_edit_after_spawning_is_ignored() {
     assert_eq!((before, st.nodes.len()), (21, 21), "the edit was applied or the cable lost");
     assert!(app.world().get::<CableSim>(cable).is_some() && st.tensions[0] > 1900.0);
 }
+
+/// A point load the chain cannot take (off the rope, or not finite) is
+/// refused with a message naming it, and nothing panics.
+#[test]
+fn a_bad_point_load_is_refused_by_name() {
+    for (s, force) in [(7.0, Vec3::NEG_Y), (1.0, Vec3::new(f32::NAN, 0.0, 0.0)), (f64::NAN, Vec3::NEG_Y)] {
+        let mut app = plugin_app::headless_app(DT);
+        let mut d = rope(CableAnchor::World { point: Vec3::ZERO, clamp: false }, CableAnchor::Free);
+        d.loads.push(CablePointLoad { s, force: force.as_dvec3() * 100.0, moment: bevy::math::DVec3::ZERO });
+        let cable = app.world_mut().spawn(d).id();
+        run(&mut app, 3);
+        let messages: Vec<String> = app.world_mut().resource_mut::<Messages<CableDiverged>>().drain().map(|m| m.message).collect();
+        assert!(app.world().get::<CableSim>(cable).is_none(), "s = {s}: the cable was built");
+        assert!(messages.iter().any(|m| m.starts_with("load 0 (s = ")), "s = {s}: {messages:?}");
+    }
+}

@@ -64,6 +64,18 @@ pub(crate) fn init_cables(
                 }
             })
         };
+        // A load the chain cannot take is refused by name, not stepped.
+        if let Some((i, l)) =
+            d.loads.iter().enumerate().find(|(_, l)| !(l.s.is_finite() && (0.0..=d.length).contains(&l.s) && l.force.is_finite() && l.moment.is_finite()))
+        {
+            let message = format!(
+                "load {i} (s = {} m, force {} N, moment {} N·m): s must be within the cable's length {} m and every value finite",
+                l.s, l.force, l.moment, d.length
+            );
+            diverged.write(CableDiverged { entity, time: 0.0, message });
+            commands.entity(entity).remove::<CableDescriptor>();
+            continue;
+        }
         let points = exact.map_or([None, None], |x| [x.start, x.end]);
         let ends = attach(&d.start, points[0], "start").and_then(|s| Ok((s, attach(&d.end, points[1], "end")?)));
         let ((start, sb), (end, eb)) = match ends {
