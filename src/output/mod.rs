@@ -82,9 +82,16 @@ pub struct CsvStream {
 impl CsvStream {
     /// Writes the row `time, values…` and flushes it to the file.
     pub fn append(&mut self, time: f64, values: &[f64]) -> Result<(), OutputError> {
-        let record = std::iter::once(time).chain(values.iter().copied()).map(|x| x.to_string());
-        self.w.write_record(record).map_err(|source| OutputError::Csv { path: self.path.clone(), source })?;
+        let mut row = Vec::with_capacity(values.len() + 1);
+        row.push(time);
+        row.extend_from_slice(values);
+        self.write(&row)?;
         self.flush()
+    }
+
+    /// Writes one full row (time first), buffered.
+    fn write(&mut self, row: &[f64]) -> Result<(), OutputError> {
+        self.w.write_record(row.iter().map(|x| x.to_string())).map_err(|source| OutputError::Csv { path: self.path.clone(), source })
     }
 
     fn flush(&mut self) -> Result<(), OutputError> {
@@ -171,14 +178,11 @@ impl Recorder {
 
     /// Write `results.csv`: header `time,<columns>`, then one line per row.
     pub fn write_csv(&self, path: &Path) -> Result<(), OutputError> {
-        let csv_err = |source| OutputError::Csv { path: path.to_path_buf(), source };
-        let mut w = csv::Writer::from_path(path).map_err(csv_err)?;
-        let header = std::iter::once("time").chain(self.columns.iter().map(String::as_str));
-        w.write_record(header).map_err(csv_err)?;
+        let mut stream = self.stream_csv(path)?;
         for row in &self.rows {
-            w.write_record(row.iter().map(|x| x.to_string())).map_err(csv_err)?;
+            stream.write(row)?;
         }
-        w.flush().map_err(|source| OutputError::Io { path: path.to_path_buf(), source })
+        stream.flush()
     }
 
     /// Starts `results.csv` at `path` for streaming: writes the header now

@@ -68,9 +68,9 @@ use crate::cable::{BodyInChain, Cable, RopeSection, RopeView};
 use crate::coupling::set_velocity_drive;
 use crate::coupling::Role;
 use crate::integrate::{Scheme, SchemeParams};
-use crate::scenario::{BodyKind, CableEnd, Drive, Location, Quantity, Scenario, Shape};
+use crate::scenario::{BodyKind, CableEnd, Drive, Location, Quantity, Scenario};
 use crate::sim::probe::{self, Probe, ProbeSource};
-use crate::sim::rapier::{drive_joints, joint_data, motion_pose, pose_of, rigid_energy, velocity_of, RapierJoint};
+use crate::sim::rapier::{drive_joints, free_body_energies, joint_data, motion_pose, pose_of, shared_shape, velocity_of, RapierJoint};
 use crate::sim::{body_motion, shape_inertia, SimError, World as SimWorld};
 use bevy::math::{DMat3, DQuat, DVec3};
 use bevy::prelude::*;
@@ -114,11 +114,15 @@ pub struct ScenarioRun {
 }
 
 impl ScenarioRun {
+    /// The sub-step `h = dt / substeps`, s: the app's fixed step.
+    fn substep_length(&self) -> f64 {
+        self.scenario.simulation.dt / self.substeps as f64
+    }
+
     /// Time at the start of the current sub-step, s (cablesim's
     /// `t0 + k h`).
     fn substep_time(&self) -> f64 {
-        let sim = &self.scenario.simulation;
-        self.steps as f64 * sim.dt + self.substep as f64 * (sim.dt / self.substeps as f64)
+        self.steps as f64 * self.scenario.simulation.dt + self.substep as f64 * self.substep_length()
     }
 }
 
@@ -246,12 +250,7 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
             BodyKind::Fixed => RigidBody::Fixed,
             BodyKind::Kinematic => RigidBody::KinematicPositionBased,
         };
-        let collider = match b.shape {
-            Shape::Ball { radius } => Collider::ball(radius as f32),
-            Shape::Cuboid { half_extents: h } => Collider::cuboid(h.x as f32, h.y as f32, h.z as f32),
-            Shape::Capsule { radius, half_height } => Collider::capsule_y(half_height as f32, radius as f32),
-            Shape::Cylinder { radius, half_height } => Collider::cylinder(half_height as f32, radius as f32),
-        };
+        let collider = Collider::from(shared_shape(&b.shape));
         let mass = b.mass.unwrap_or(0.0);
         let exact = BodyExact {
             mass,
@@ -340,7 +339,7 @@ fn move_kinematic(run: Res<ScenarioRun>, mut ctx: WriteRapierContext, handles: Q
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
-    let h = run.scenario.simulation.dt / run.substeps as f64;
+    let h = run.substep_length();
     let t = run.substep_time();
     for b in &run.scenario.bodies {
         let (Some(m), Some(handle)) = (&b.motion, run.bodies.get(&b.name).and_then(|e| handles.get(*e).ok())) else {
@@ -356,7 +355,7 @@ fn move_kinematic(run: Res<ScenarioRun>, mut ctx: WriteRapierContext, handles: Q
 /// the rail joint's motor, which the plugin reads (the same motor `cablesim`
 /// gives the chain, [`crate::coupling::velocity_drive_motor`]).
 fn drive_rails(run: Res<ScenarioRun>, mut joints: Query<&mut ImpulseJoint>) {
-    let h = run.scenario.simulation.dt / run.substeps as f64;
+    let h = run.substep_length();
     let t = run.substep_time();
     for j in run.scenario.joints.iter().filter(|j| run.rails.contains(&j.name)) {
         let (Some(Drive::Velocity { velocity, max_force }), Some(mut joint)) = (&j.drive, run.joints.get(&j.name).and_then(|e| joints.get_mut(*e).ok())) else {
@@ -372,7 +371,7 @@ fn drive_rapier_joints(mut run: ResMut<ScenarioRun>, mut ctx: WriteRapierContext
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
-    let h = run.scenario.simulation.dt / run.substeps as f64;
+    let h = run.substep_length();
     let t = run.substep_time();
     let (bodies, impulse_joints) = (&mut ctx.rigidbody_set.bodies, &mut ctx.joints.impulse_joints);
     if let Some(joints) = run.rapier_joints.as_mut() {
@@ -484,19 +483,10 @@ impl ProbeSource for View<'_> {
     fn rapier_energies(&self) -> (f64, f64) {
         let g = self.run.scenario.simulation.gravity;
         let free = self.run.scenario.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic && !self.carried.contains_key(b.name.as_str()));
-        // Summed as `cablesim` sums them: kinetic, then gravitational.
         let free: Vec<(f64, DMat3, RigidBodyHandle)> = free
             .filter_map(|b| self.handles.get(b.name.as_str()).map(|&h| (b.mass.unwrap_or(0.0), shape_inertia(&b.shape, b.mass.unwrap_or(0.0)), h)))
             .collect();
-        let ke = free
-            .iter()
-            .map(|(m, i, h)| {
-                let (v, w) = velocity_of(self.bodies, *h);
-                rigid_energy(*m, i, pose_of(self.bodies, *h).1, v, w)
-            })
-            .sum();
-        let pe = free.iter().map(|(m, _, h)| -m * g.dot(pose_of(self.bodies, *h).0)).sum();
-        (ke, pe)
+        free_body_energies(self.bodies, &free, g)
     }
 
     fn rope(&self, name: &str) -> Option<RopeView<'_>> {

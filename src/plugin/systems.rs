@@ -72,8 +72,7 @@ pub(crate) fn init_cables(
                 "load {i} (s = {} m, force {} N, moment {} N·m): s must be within the cable's length {} m and every value finite",
                 l.s, l.force, l.moment, d.length
             );
-            diverged.write(CableDiverged { entity, time: 0.0, message });
-            commands.entity(entity).remove::<CableDescriptor>();
+            fail(&mut commands, &mut diverged, entity, message);
             continue;
         }
         let points = exact.map_or([None, None], |x| [x.start, x.end]);
@@ -81,8 +80,7 @@ pub(crate) fn init_cables(
         let ((start, sb), (end, eb)) = match ends {
             Ok(x) => x,
             Err(message) => {
-                diverged.write(CableDiverged { entity, time: 0.0, message });
-                commands.entity(entity).remove::<CableDescriptor>();
+                fail(&mut commands, &mut diverged, entity, message);
                 continue;
             }
         };
@@ -122,10 +120,6 @@ pub(crate) fn init_cables(
     let entity_of: HashMap<RigidBodyHandle, Entity> = owners.iter().flat_map(|(_, ends, _, _)| ends.iter().flatten().map(|(e, h)| (*h, *e))).collect();
     let batch: Vec<Entity> = owners.iter().map(|(e, _, _, _)| *e).collect();
     let message = |e: &CouplingError| refusal(e, &entity_of, &batch);
-    let fail = |commands: &mut Commands, diverged: &mut MessageWriter<CableDiverged>, entity: Entity, message: String| {
-        diverged.write(CableDiverged { entity, time: 0.0, message });
-        commands.entity(entity).remove::<CableDescriptor>();
-    };
     // 1. Build: the cables with their own chain, and the ropes grafted
     //    onto another batch member's chain (onto, rope index).
     let mut sims: Vec<Option<CoupledCable>> = Vec::new();
@@ -218,6 +212,13 @@ pub(crate) fn init_cables(
         }
         commands.entity(*entity).insert((CableSim { coupled: cc, bodies: carried, rail }, CableState::default()));
     }
+}
+
+/// A cable of a batch is not built: its [`CableDiverged`] message at time 0,
+/// and its descriptor removed so that it is not tried again.
+fn fail(commands: &mut Commands, diverged: &mut MessageWriter<CableDiverged>, entity: Entity, message: String) {
+    diverged.write(CableDiverged { entity, time: 0.0, message });
+    commands.entity(entity).remove::<CableDescriptor>();
 }
 
 /// Why a cable of the batch `batch` was not built, with entities for the

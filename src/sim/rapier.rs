@@ -170,12 +170,34 @@ pub(crate) fn pose(p: DVec3, q: DQuat) -> rp::Pose {
 
 /// The collider of a scenario shape (local y is the capsule / cylinder axis).
 pub(crate) fn collider(shape: &Shape) -> rp::ColliderBuilder {
+    rp::ColliderBuilder::new(shared_shape(shape))
+}
+
+/// The rapier shape of a scenario shape (local y is the capsule / cylinder
+/// axis), for `cablesim`'s colliders and the Bevy runner's.
+pub(crate) fn shared_shape(shape: &Shape) -> rp::SharedShape {
     match *shape {
-        Shape::Ball { radius } => rp::ColliderBuilder::ball(radius as f32),
-        Shape::Cuboid { half_extents: h } => rp::ColliderBuilder::cuboid(h.x as f32, h.y as f32, h.z as f32),
-        Shape::Capsule { radius, half_height } => rp::ColliderBuilder::capsule_y(half_height as f32, radius as f32),
-        Shape::Cylinder { radius, half_height } => rp::ColliderBuilder::cylinder(half_height as f32, radius as f32),
+        Shape::Ball { radius } => rp::SharedShape::ball(radius as f32),
+        Shape::Cuboid { half_extents: h } => rp::SharedShape::cuboid(h.x as f32, h.y as f32, h.z as f32),
+        Shape::Capsule { radius, half_height } => rp::SharedShape::capsule_y(half_height as f32, radius as f32),
+        Shape::Cylinder { radius, half_height } => rp::SharedShape::cylinder(half_height as f32, radius as f32),
     }
+}
+
+/// Kinetic energy (translation + rotation) and gravitational energy
+/// −m g·x (J) of the rapier bodies `free` (mass kg, body-frame inertia
+/// kg·m², handle), each summed in their order: the dynamic bodies rapier
+/// keeps, for the `system` probes of both runners.
+pub(crate) fn free_body_energies(bodies: &rp::RigidBodySet, free: &[(f64, DMat3, rp::RigidBodyHandle)], gravity: DVec3) -> (f64, f64) {
+    let ke = free
+        .iter()
+        .map(|(m, i, h)| {
+            let (v, w) = velocity_of(bodies, *h);
+            rigid_energy(*m, i, pose_of(bodies, *h).1, v, w)
+        })
+        .sum();
+    let pe = free.iter().map(|(m, _, h)| -m * gravity.dot(pose_of(bodies, *h).0)).sum();
+    (ke, pe)
 }
 
 /// Pose (origin, orientation) of rapier body `h` in f64.
@@ -373,21 +395,11 @@ impl RapierWorld {
         Ok(())
     }
 
-    /// Kinetic energy (translation + rotation) of the dynamic bodies, J.
-    pub fn kinetic_energy(&self) -> f64 {
-        self.bodies
-            .iter()
-            .filter(|b| b.kind == BodyKind::Dynamic && !b.carried)
-            .map(|b| {
-                let (v, w) = self.velocity_of(b.handle);
-                rigid_energy(b.mass, &b.inertia, self.pose_of(b.handle).1, v, w)
-            })
-            .sum()
-    }
-
-    /// Gravitational energy −m g·x of the dynamic bodies, J.
-    pub fn gravity_energy(&self, gravity: DVec3) -> f64 {
-        self.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic && !b.carried).map(|b| -b.mass * gravity.dot(self.pose_of(b.handle).0)).sum()
+    /// Kinetic and gravitational energy (J) of the dynamic bodies rapier
+    /// keeps ([`free_body_energies`]).
+    pub fn energies(&self, gravity: DVec3) -> (f64, f64) {
+        let free: Vec<_> = self.bodies.iter().filter(|b| b.kind == BodyKind::Dynamic && !b.carried).map(|b| (b.mass, b.inertia, b.handle)).collect();
+        free_body_energies(&self.pw.bodies, &free, gravity)
     }
 }
 

@@ -646,7 +646,7 @@ impl super::probe::ProbeSource for World {
     }
 
     fn rapier_energies(&self) -> (f64, f64) {
-        (self.rapier.kinetic_energy(), self.rapier.gravity_energy(self.scenario.simulation.gravity))
+        self.rapier.energies(self.scenario.simulation.gravity)
     }
 
     fn rope(&self, name: &str) -> Option<RopeView<'_>> {
