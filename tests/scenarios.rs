@@ -509,7 +509,9 @@ end = {{ body = "hub", clamp = {clamp} }}
 /// motion (the anchor point's ω × r and α × r + ω × (ω × r), the body's ω
 /// and α) gives the same motion as a hand-written `BaseMotion::Prescribed`
 /// of the same spin: rate 90t deg/s for t ≤ 1 s, then 90 deg/s, about +y;
-/// the anchor 1 m off the axis, the beam along +x.
+/// the anchor 1 m off the axis, the beam along +x. A beam keeps
+/// compression (`tension_only = false`): as a tension-only rope, its first
+/// element, pushed by the spin-up, turned inside out (refused since).
 #[test]
 fn spin_motion_drives_an_off_axis_clamp_like_the_prescribed_base() {
     use bevy_rapier_cable::cable::*;
@@ -537,6 +539,7 @@ linear_density = 1.0
 ea = 1e6
 ei = 1.0
 gj = 1.0
+tension_only = false
 start = { body = "hub", anchor = [0, 0, 1], clamp = true }
 path = [[0, 0, 1], [1, 0, 1]]
 "#;
@@ -568,6 +571,7 @@ path = [[0, 0, 1], [1, 0, 1]]
         .path(vec![DVec3::Z, DVec3::new(1.0, 0.0, 1.0)])
         .start(RopeStart::Clamped(base))
         .gravity(DVec3::ZERO)
+        .tension_only(false)
         .build()
         .unwrap();
     let mut api = Cable::new(model, Scheme::default()).unwrap();

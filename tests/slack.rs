@@ -428,3 +428,34 @@ fn static_solve_refuses_an_equilibrium_that_needs_the_rope_to_push() {
     println!("rod: tip {tip:.9} m vs {exact:.9} m");
     assert!((tip - exact).abs() < 1e-9, "{tip} vs {exact}");
 }
+
+/// A tension-only element may shorten through zero length (a slack rope
+/// folds), but one turned inside out past its own length (`gap < −2 L_e`)
+/// would be a stretched element that its law, written for the slide's
+/// sign, takes as slack: it would lengthen without force (found on a
+/// damped chain whose tip element went slack and then hung inverted,
+/// 30 m long). The step refuses it by name and keeps the state.
+#[test]
+fn an_element_turned_inside_out_is_refused_not_left_to_stretch_freely() {
+    let attempt = |gap_in_lengths: f64| {
+        let mut cable = payload_on_straight(20.0, 40, 10.0, true);
+        let l = cable.model.layout.clone();
+        let s = l.dof(5, 3);
+        cable.state.q[s] = gap_in_lengths * l.element_length;
+        cable.state.v.iter_mut().for_each(|v| *v = 0.0);
+        let q = cable.state.q.clone();
+        let r = cable.step(1.0 / 60.0);
+        (r, q, cable)
+    };
+    // Shorter than zero length but not longer than its rest length
+    // inverted: slack, legal.
+    let (ok, _, _) = attempt(-1.5);
+    assert!(ok.is_ok(), "a folded slack element was refused: {:?}", ok.err());
+    let (err, q, cable) = attempt(-2.5);
+    let e = err.expect_err("an element inverted past its own length was accepted");
+    let message = e.to_string();
+    println!("{message}");
+    assert!(message.contains("element 5") && message.contains("inside out"), "{message}");
+    assert_eq!(cable.state.q, q, "a refused step changed the state");
+    assert_eq!(cable.time(), 0.0);
+}

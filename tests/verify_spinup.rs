@@ -49,6 +49,7 @@ fn spin_up(n: usize) -> Cable {
         .shear_stiffness(1e7)
         .path(vec![DVec3::ZERO, DVec3::new(10.0, 0.0, 0.0)])
         .start(RopeStart::Clamped(base))
+        .tension_only(false) // a beam: it takes compression
         .end(RopeEnd::Free)
         .gravity(DVec3::ZERO)
         .build()
@@ -168,6 +169,7 @@ fn spin_up_guard_soft_beam_fails_the_band() {
         .shear_stiffness(1e7)
         .path(vec![DVec3::ZERO, DVec3::new(10.0, 0.0, 0.0)])
         .start(RopeStart::Clamped(base))
+        .tension_only(false) // a beam: it takes compression
         .gravity(DVec3::ZERO)
         .build()
         .unwrap();

@@ -230,13 +230,18 @@ impl Cable {
         for i in usize::from(l.free_start)..l.elements {
             let s = l.dof(i, 3);
             let gap = self.state.q[s];
-            // A tension-only (slack) element may shorten freely: only its
-            // stretch is bounded.
+            // A tension-only (slack) element may shorten freely, through
+            // zero length, but not turn inside out beyond its own length
+            // (`gap < −2 L_e`): it would then be a stretched element that
+            // its law (written for the slide's sign) takes as slack and lets
+            // lengthen without force.
             let tension_only = self.model.chain.joints()[s].law == SpringLaw::TensionOnly;
-            if gap > l.element_length || (!tension_only && gap < -l.element_length) {
+            let least = if tension_only { -2.0 * l.element_length } else { -l.element_length };
+            if gap > l.element_length || gap < least {
+                let inverted = if tension_only && gap < least { ", turned inside out past its own length" } else { "" };
                 return Err(CableError::Diverged {
                     time: self.state.t,
-                    reason: format!("{which}element {i} strained by {:.1} % (beyond any physical sense)", 100.0 * gap / l.element_length),
+                    reason: format!("{which}element {i} strained by {:.1} %{inverted} (beyond any physical sense)", 100.0 * gap / l.element_length),
                 });
             }
         }
