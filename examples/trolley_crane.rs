@@ -10,7 +10,7 @@ use bevy::app::ScheduleRunnerPlugin;
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier_cable::cable::preset;
+use bevy_rapier_cable::cable::RopeMaterial;
 use bevy_rapier_cable::plugin::*;
 
 #[derive(Component)]
@@ -55,15 +55,13 @@ fn setup(mut commands: Commands) {
         .id();
     let payload =
         commands.spawn((Payload, RigidBody::Dynamic, Transform::from_xyz(0.0, 1.45, 0.0), Collider::ball(0.3), ColliderMassProperties::Mass(1000.0))).id();
-    let section = preset("steel_wire_rope_6x36_iwrc", 0.020).expect("known preset");
-    commands.spawn(CableDescriptor::new(
-        10.0,
-        50,
-        section,
-        0.020,
-        CableAnchor::Body { entity: trolley, anchor: Vec3::new(0.0, -0.25, 0.0), clamp: false },
-        CableAnchor::Body { entity: payload, anchor: Vec3::new(0.0, 0.3, 0.0), clamp: false },
-    ));
+    commands.spawn(
+        CableDescriptor::new(10.0)
+            .material(RopeMaterial::steel_6x36_iwrc(0.020))
+            .segments(50)
+            .start(CableAnchor::body(trolley, Vec3::new(0.0, -0.25, 0.0)))
+            .end(CableAnchor::body(payload, Vec3::new(0.0, 0.3, 0.0))),
+    );
 }
 
 /// Pushes the trolley with 2 kN for the first two seconds.
@@ -78,7 +76,7 @@ fn report(
     trolley: Query<&Transform, With<Trolley>>,
     payload: Query<&Transform, With<Payload>>,
     mut frames: ResMut<Frames>,
-    mut diverged: MessageReader<CableDiverged>,
+    mut diverged: MessageReader<CableError>,
     mut exit: MessageWriter<AppExit>,
 ) {
     for d in diverged.read() {

@@ -45,3 +45,9 @@ pub mod sim;
 #[doc = include_str!("../README.md")]
 #[cfg(doctest)]
 pub struct ReadmeDoctests;
+
+/// The code of `docs/embedding.md` (the Bevy embedding guide), compiled as
+/// doctests.
+#[doc = include_str!("../docs/embedding.md")]
+#[cfg(all(doctest, feature = "app"))]
+pub struct EmbeddingDoctests;

@@ -9,7 +9,7 @@
 mod plugin_app;
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier_cable::cable::RopeSection;
+use bevy_rapier_cable::cable::{RopeMaterial, RopeSection};
 use bevy_rapier_cable::plugin::*;
 
 const DT: f32 = 1.0 / 60.0;
@@ -34,11 +34,10 @@ fn spawn_hanging(app: &mut App, extra: impl Bundle) -> (Entity, Entity) {
         .spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -(L + R), 0.0), Collider::ball(R), ColliderMassProperties::Mass(M), Velocity::zero(), extra))
         .id();
     let section = RopeSection { linear_density: 0.01, ea: 1e8, ei: 1e-3, ei2: 1e-3, gj: 1e-3, min_breaking_load: 0.0 };
-    let d = CableDescriptor::new(
+    let d = CableDescriptor::from_section(
         L as f64,
         20,
-        section,
-        0.01,
+        RopeMaterial::custom(section, 0.01),
         CableAnchor::World { point: Vec3::ZERO, clamp: false },
         CableAnchor::Body { entity: payload, anchor: Vec3::Y * R, clamp: false },
     );
@@ -230,9 +229,53 @@ fn locked_axes_on_a_carried_body_are_refused() {
     let mut msgs: Vec<String> = Vec::new();
     for _ in 0..3 {
         app.update();
-        msgs.extend(app.world().resource::<Messages<CableDiverged>>().iter_current_update_messages().map(|m| m.message.clone()));
+        let errors = app.world().resource::<Messages<CableError>>();
+        assert!(errors.iter_current_update_messages().all(|m| m.kind == CableErrorKind::Configuration));
+        msgs.extend(errors.iter_current_update_messages().map(|m| m.message.clone()));
     }
     println!("{msgs:?}");
     assert!(app.world().get::<CableSim>(cable).is_none());
     assert!(msgs.iter().any(|m| m.contains("locked axes")), "{msgs:?}");
+}
+
+/// A NaN or infinite value the game gives a carried body (an
+/// `ExternalForce`, a `Velocity` write, an `ExternalImpulse`) stops the
+/// cable before the step with a [`CableErrorKind::InvalidInput`] error
+/// that names the component, instead of entering the solve (it reported
+/// a "singular effective matrix" before). The cable keeps its last good
+/// state, and the payload its finite pose.
+#[test]
+fn a_non_finite_input_on_a_carried_body_is_named_and_stops_the_cable() {
+    let cases: [(&str, &str); 3] = [("force", "ExternalForce::force"), ("velocity", "velocity is not finite"), ("impulse", "ExternalImpulse")];
+    for (how, named) in cases {
+        let mut app = app();
+        let (payload, cable) = hang(&mut app, ());
+        for _ in 0..5 {
+            app.update();
+        }
+        let t_before = app.world().get::<CableSim>(cable).unwrap().cable.time();
+        match how {
+            "force" => {
+                app.world_mut().entity_mut(payload).insert(ExternalForce { force: Vec3::new(f32::NAN, 0.0, 0.0), torque: Vec3::ZERO });
+            }
+            "velocity" => app.world_mut().get_mut::<Velocity>(payload).unwrap().linear = Vec3::new(0.0, f32::INFINITY, 0.0),
+            _ => {
+                app.world_mut().entity_mut(payload).insert(ExternalImpulse { impulse: Vec3::new(0.0, 0.0, f32::NAN), torque_impulse: Vec3::ZERO });
+            }
+        }
+        let mut errors: Vec<CableError> = Vec::new();
+        for _ in 0..3 {
+            app.update();
+            errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
+        }
+        println!("{how}: {}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(" | "));
+        assert_eq!(errors.len(), 1, "{how}: one error, once: {errors:?}");
+        let e = &errors[0];
+        assert_eq!((e.entity, e.kind), (cable, CableErrorKind::InvalidInput), "{how}: {e}");
+        assert!(e.message.contains(named) && e.message.contains(&format!("{payload}")), "{how}: {e}");
+        let sim = app.world().get::<CableSim>(cable).unwrap();
+        assert!(sim.failed, "{how}: the cable stopped");
+        assert_eq!(sim.cable.time(), t_before, "{how}: no step was taken with the bad input");
+        assert!(sim.cable.state.is_finite(), "{how}: the cable's state stayed finite");
+    }
 }

@@ -6,7 +6,7 @@
 mod plugin_app;
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier_cable::cable::RopeSection;
+use bevy_rapier_cable::cable::{RopeMaterial, RopeSection};
 use bevy_rapier_cable::integrate::{DenseSystem, Integrator, Scheme, State};
 use bevy_rapier_cable::plugin::*;
 
@@ -37,11 +37,10 @@ fn spawn_trolley(app: &mut App, big_m: f32, m: f32, l: f32, phi: f32, n: usize) 
     let r = 0.05;
     let dir = Vec3::new(phi.sin(), -phi.cos(), 0.0);
     let payload = w.spawn((RigidBody::Dynamic, Transform::from_translation(dir * l), Collider::ball(r), ColliderMassProperties::Mass(m))).id();
-    let mut d = CableDescriptor::new(
+    let mut d = CableDescriptor::from_section(
         (l - r) as f64,
         n,
-        steel(1e10, 1e-3),
-        0.02,
+        RopeMaterial::custom(steel(1e10, 1e-3), 0.02),
         CableAnchor::Body { entity: trolley, anchor: Vec3::ZERO, clamp: false },
         CableAnchor::Body { entity: payload, anchor: -dir * r, clamp: false },
     );
@@ -239,11 +238,10 @@ fn mass_ratio_extremes_stay_stable_at_frame_step() {
         let r = 0.2;
         let payload = w.spawn((RigidBody::Dynamic, Transform::from_xyz(3.0, 0.0 - r, 0.0), Collider::ball(r), ColliderMassProperties::Mass(payload_mass))).id();
         let l = (3.0f32 * 3.0 + 20.0 * 20.0).sqrt();
-        let mut d = CableDescriptor::new(
+        let mut d = CableDescriptor::from_section(
             l as f64,
             n,
-            steel(2e7, mu),
-            0.02,
+            RopeMaterial::custom(steel(2e7, mu), 0.02),
             CableAnchor::Body { entity: top, anchor: Vec3::ZERO, clamp: false },
             CableAnchor::Body { entity: payload, anchor: Vec3::Y * r, clamp: false },
         );
@@ -300,11 +298,10 @@ fn cable_follows_a_kinematic_body() {
     let tip = w.spawn((RigidBody::KinematicVelocityBased, Transform::from_xyz(0.0, 10.0, 0.0), Velocity::zero())).id();
     let payload = w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -0.2, 0.0), Collider::ball(0.2), ColliderMassProperties::Mass(200.0))).id();
     let cable = w
-        .spawn(CableDescriptor::new(
+        .spawn(CableDescriptor::from_section(
             10.0,
             20,
-            steel(2e7, 1.6),
-            0.02,
+            RopeMaterial::custom(steel(2e7, 1.6), 0.02),
             CableAnchor::Body { entity: tip, anchor: Vec3::ZERO, clamp: false },
             CableAnchor::Body { entity: payload, anchor: Vec3::Y * 0.2, clamp: false },
         ))
@@ -341,11 +338,10 @@ fn rope_force_acts_on_a_body_rapier_keeps() {
     let body = w.spawn((RigidBody::Dynamic, Transform::default(), Collider::ball(0.1), ColliderMassProperties::Mass(m), Velocity::zero())).id();
     let anchor = w.spawn((RigidBody::Fixed, Transform::from_xyz(span, 0.0, 0.0))).id();
     let cable = w
-        .spawn(CableDescriptor::new(
+        .spawn(CableDescriptor::from_section(
             l0,
             20,
-            steel(ea, 0.01),
-            0.01,
+            RopeMaterial::custom(steel(ea, 0.01), 0.01),
             CableAnchor::Body { entity: body, anchor: Vec3::ZERO, clamp: false },
             CableAnchor::Body { entity: anchor, anchor: Vec3::ZERO, clamp: false },
         ))

@@ -9,13 +9,14 @@ mod plugin_app;
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier_cable::cable::preset;
+use bevy_rapier_cable::cable::RopeMaterial;
 use bevy_rapier_cable::plugin::*;
 
 const DT: f32 = 1.0 / 60.0;
 const G: f32 = 9.81;
 
 fn rope(start: CableAnchor, end: CableAnchor) -> CableDescriptor {
-    CableDescriptor::new(5.0, 20, preset("steel_wire_rope_6x36_iwrc", 0.016).unwrap(), 0.016, start, end)
+    CableDescriptor::from_section(5.0, 20, RopeMaterial::custom(preset("steel_wire_rope_6x36_iwrc", 0.016).unwrap(), 0.016), start, end)
 }
 
 fn hang(app: &mut App, extra: impl Bundle) -> (Entity, Entity) {
@@ -127,7 +128,7 @@ fn a_bad_point_load_is_refused_by_name() {
         d.loads.push(CablePointLoad { s, force: force.as_dvec3() * 100.0, moment: bevy::math::DVec3::ZERO });
         let cable = app.world_mut().spawn(d).id();
         run(&mut app, 3);
-        let messages: Vec<String> = app.world_mut().resource_mut::<Messages<CableDiverged>>().drain().map(|m| m.message).collect();
+        let messages: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|m| m.message).collect();
         assert!(app.world().get::<CableSim>(cable).is_none(), "s = {s}: the cable was built");
         assert!(messages.iter().any(|m| m.starts_with("load 0 (s = ")), "s = {s}: {messages:?}");
     }

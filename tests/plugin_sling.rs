@@ -11,6 +11,7 @@ mod plugin_app;
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier_cable::cable::preset;
+use bevy_rapier_cable::cable::RopeMaterial;
 use bevy_rapier_cable::plugin::*;
 use irvine::irvine_leg;
 
@@ -27,11 +28,10 @@ fn sling(app: &mut App) -> (Entity, Entity, Entity) {
         w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -8.0, 0.0), Collider::ball(0.3), ColliderMassProperties::Mass(M as f32), Velocity::zero())).id();
     let section = preset("steel_wire_rope_6x36_iwrc", 0.02).unwrap();
     let mut leg = |x: f32| {
-        let mut d = CableDescriptor::new(
+        let mut d = CableDescriptor::from_section(
             10.0,
             10,
-            section,
-            0.02,
+            RopeMaterial::custom(section, 0.02),
             CableAnchor::World { point: Vec3::new(x, 0.0, 0.0), clamp: false },
             CableAnchor::Body { entity: payload, anchor: Vec3::ZERO, clamp: false },
         );
@@ -42,7 +42,7 @@ fn sling(app: &mut App) -> (Entity, Entity, Entity) {
     for _ in 0..2 {
         app.update();
     }
-    let failed: Vec<String> = app.world().resource::<Messages<CableDiverged>>().iter_current_update_messages().map(|m| m.message.clone()).collect();
+    let failed: Vec<String> = app.world().resource::<Messages<CableError>>().iter_current_update_messages().map(|m| m.message.clone()).collect();
     assert!(failed.is_empty(), "{failed:?}");
     (payload, a, b)
 }
@@ -117,7 +117,7 @@ fn two_leg_sling_in_the_plugin_hangs_on_the_catenary_and_swings() {
 
 /// A loop through two dynamic bodies (a box on a rope from the world and on
 /// a rope from a block, the block on a rope from the world) is refused at
-/// creation: every cable of the island gets a `CableDiverged` message, the
+/// creation: every cable of the island gets a `CableError` message, the
 /// first naming both bodies, and none is built.
 #[test]
 fn a_loop_through_two_dynamic_bodies_is_refused_by_name() {
@@ -128,14 +128,16 @@ fn a_loop_through_two_dynamic_bodies_is_refused_by_name() {
     };
     let (boxed, block) = (body(w, -8.0, 0.0), body(w, -3.0, 6.0));
     let section = preset("steel_wire_rope_6x36_iwrc", 0.02).unwrap();
-    let cable = |w: &mut World, start: CableAnchor, end: CableAnchor, len: f64| w.spawn(CableDescriptor::new(len, 4, section, 0.02, start, end)).id();
+    let cable = |w: &mut World, start: CableAnchor, end: CableAnchor, len: f64| {
+        w.spawn(CableDescriptor::from_section(len, 4, RopeMaterial::custom(section, 0.02), start, end)).id()
+    };
     let at = |entity| CableAnchor::Body { entity, anchor: Vec3::ZERO, clamp: false };
     let world = |x: f32| CableAnchor::World { point: Vec3::new(x, 0.0, 0.0), clamp: false };
     let cables = [cable(w, world(-6.0), at(boxed), 10.0), cable(w, at(block), at(boxed), 7.9), cable(w, world(6.0), at(block), 3.0)];
     let mut messages = Vec::new();
     for _ in 0..2 {
         app.update();
-        messages.extend(app.world().resource::<Messages<CableDiverged>>().iter_current_update_messages().map(|m| (m.entity, m.message.clone())));
+        messages.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().map(|m| (m.entity, m.message.clone())));
     }
     println!("{messages:#?}");
     for c in cables {

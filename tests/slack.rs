@@ -439,7 +439,7 @@ fn static_solve_refuses_an_equilibrium_that_needs_the_rope_to_push() {
 fn an_element_turned_inside_out_is_refused_not_left_to_stretch_freely() {
     let attempt = |gap_in_lengths: f64| {
         let mut cable = payload_on_straight(20.0, 40, 10.0, true);
-        let l = cable.model.layout.clone();
+        let l = cable.model.layout;
         let s = l.dof(5, 3);
         cable.state.q[s] = gap_in_lengths * l.element_length;
         cable.state.v.iter_mut().for_each(|v| *v = 0.0);

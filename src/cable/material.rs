@@ -13,6 +13,7 @@
 
 /// Section properties of a rope (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "app", derive(bevy::reflect::Reflect))]
 pub struct RopeSection {
     /// Linear density μ, kg/m.
     pub linear_density: f64,
@@ -58,6 +59,87 @@ pub fn preset(name: &str, diameter: f64) -> Option<RopeSection> {
     }
 }
 
+/// A rope's material and nominal diameter: the typed form of [`preset`],
+/// so that the diameter is given once and a name cannot be misspelt.
+///
+/// ```
+/// use bevy_rapier_cable::cable::RopeMaterial;
+/// let m = RopeMaterial::steel_6x36_iwrc(0.020);
+/// assert_eq!(m.diameter(), 0.020);
+/// assert!((m.section().linear_density - 1.6).abs() < 1e-12); // kg/m
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "app", derive(bevy::reflect::Reflect))]
+pub enum RopeMaterial {
+    /// Steel wire rope 6×36 IWRC (preset `steel_wire_rope_6x36_iwrc`).
+    SteelWireRope6x36Iwrc {
+        /// Nominal diameter, m.
+        diameter: f64,
+    },
+    /// Polyester fibre rope (preset `fibre_rope_polyester`).
+    FibreRopePolyester {
+        /// Nominal diameter, m.
+        diameter: f64,
+    },
+    /// A section given property by property.
+    Custom {
+        /// The section (mass, stiffnesses, breaking load).
+        section: RopeSection,
+        /// Diameter, m (drawing, contact, drag).
+        diameter: f64,
+    },
+}
+
+impl Default for RopeMaterial {
+    /// A 20 mm steel wire rope 6×36 IWRC (1.6 kg/m, EA 1.8·10⁷ N).
+    fn default() -> Self {
+        RopeMaterial::steel_6x36_iwrc(0.020)
+    }
+}
+
+impl RopeMaterial {
+    /// Steel wire rope 6×36 IWRC of nominal `diameter`, m.
+    pub fn steel_6x36_iwrc(diameter: f64) -> Self {
+        RopeMaterial::SteelWireRope6x36Iwrc { diameter }
+    }
+
+    /// Polyester fibre rope of nominal `diameter`, m.
+    pub fn polyester(diameter: f64) -> Self {
+        RopeMaterial::FibreRopePolyester { diameter }
+    }
+
+    /// A section given property by property, drawn with `diameter`, m.
+    pub fn custom(section: RopeSection, diameter: f64) -> Self {
+        RopeMaterial::Custom { section, diameter }
+    }
+
+    /// The preset's name ([`PRESET_NAMES`]), or `"custom"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            RopeMaterial::SteelWireRope6x36Iwrc { .. } => "steel_wire_rope_6x36_iwrc",
+            RopeMaterial::FibreRopePolyester { .. } => "fibre_rope_polyester",
+            RopeMaterial::Custom { .. } => "custom",
+        }
+    }
+
+    /// Nominal diameter, m.
+    pub fn diameter(&self) -> f64 {
+        match *self {
+            RopeMaterial::SteelWireRope6x36Iwrc { diameter } | RopeMaterial::FibreRopePolyester { diameter } | RopeMaterial::Custom { diameter, .. } => {
+                diameter
+            }
+        }
+    }
+
+    /// The section properties (SI units).
+    pub fn section(&self) -> RopeSection {
+        match *self {
+            RopeMaterial::Custom { section, .. } => section,
+            _ => preset(self.name(), self.diameter()).expect("every named variant is a preset"),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -70,5 +152,17 @@ mod tests {
         assert!((s.ei - 50.27).abs() < 0.1);
         assert!((s.min_breaking_load - 279_104.0).abs() < 1.0);
         assert!(preset("unobtainium", 0.02).is_none());
+    }
+
+    #[test]
+    fn typed_materials_are_the_presets() {
+        for (m, name) in [(RopeMaterial::steel_6x36_iwrc(0.024), "steel_wire_rope_6x36_iwrc"), (RopeMaterial::polyester(0.03), "fibre_rope_polyester")] {
+            assert_eq!(m.name(), name);
+            assert_eq!(Some(m.section()), preset(name, m.diameter()));
+        }
+        let s = preset("steel_wire_rope_6x36_iwrc", 0.01).unwrap();
+        assert_eq!(RopeMaterial::custom(s, 0.011).section(), s);
+        assert_eq!(RopeMaterial::custom(s, 0.011).diameter(), 0.011);
+        assert_eq!(PRESET_NAMES.len(), 2, "a new preset needs a RopeMaterial variant");
     }
 }

@@ -1,7 +1,7 @@
 //! The rope model: a chain of beam elements in relative coordinates, with an
 //! O(n) implicit articulated-body solve.
 pub mod material;
-pub use self::material::{preset, RopeSection, PRESET_NAMES};
+pub use self::material::{preset, RopeMaterial, RopeSection, PRESET_NAMES};
 pub mod chain;
 pub mod force;
 pub use self::force::{AttachedForce, ForceElement, PointSpring, PointState, PointWrench};

@@ -16,6 +16,7 @@ use thiserror::Error;
 /// [`Scheme::from_name`], which checks the parameter ranges; a variant built
 /// by hand is checked by [`Scheme::validate`] at every step.
 #[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "app", derive(bevy::reflect::Reflect))]
 pub enum Scheme {
     /// Forward (explicit) Euler on `z = (q, v)`: `q₁ = q + h v`,
     /// `v₁ = v + h a`. Grows for every `h` on an undamped oscillator

@@ -1,13 +1,16 @@
 //! Components and messages of the cable plugin.
 
-use crate::cable::{BodyInChain, RopeSection};
+#[allow(unused_imports)] // MAX_SEGMENTS: doc links
+use crate::cable::{BodyInChain, RopeMaterial, RopeSection, MAX_SEGMENTS};
 use crate::coupling::{BodyMotion, CoupledCable};
 use crate::integrate::Scheme;
+use bevy::ecs::entity::{EntityMapper, MapEntities};
 use bevy::math::{DMat3, DQuat, DVec3};
 use bevy::prelude::*;
 
 /// Where a cable end is held.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Reflect)]
+#[reflect(Debug, PartialEq)]
 pub enum CableAnchor {
     /// A free end.
     Free,
@@ -30,6 +33,37 @@ pub enum CableAnchor {
     },
 }
 
+impl CableAnchor {
+    /// Pinned (a ball joint) at a world `point`, m.
+    pub fn world(point: Vec3) -> Self {
+        CableAnchor::World { point, clamp: false }
+    }
+
+    /// Clamped at a world `point`, m: position and the initial tangent held.
+    pub fn world_clamped(point: Vec3) -> Self {
+        CableAnchor::World { point, clamp: true }
+    }
+
+    /// Pinned (a ball joint) to rapier body `entity` at `anchor`, m, in the
+    /// body's frame.
+    pub fn body(entity: Entity, anchor: Vec3) -> Self {
+        CableAnchor::Body { entity, anchor, clamp: false }
+    }
+
+    /// Clamped to rapier body `entity` at `anchor`, m, in the body's frame.
+    pub fn body_clamped(entity: Entity, anchor: Vec3) -> Self {
+        CableAnchor::Body { entity, anchor, clamp: true }
+    }
+}
+
+impl MapEntities for CableAnchor {
+    fn map_entities<E: EntityMapper>(&mut self, mapper: &mut E) {
+        if let CableAnchor::Body { entity, .. } = self {
+            *entity = mapper.get_mapped(*entity);
+        }
+    }
+}
+
 /// Spawn an entity with this to get a cable. The plugin builds it at the
 /// next fixed step (after rapier created the bodies it hangs on) and adds
 /// [`CableSim`] and [`CableState`]. The rapier velocities of the bodies the
@@ -39,18 +73,36 @@ pub enum CableAnchor {
 /// them at rest the cable starts at rest relative to its base, and a base
 /// that already moves carries the whole cable along at its velocity. A
 /// velocity the chain cannot take (a trolley moving across its rail) is
-/// reported as a [`CableDiverged`] message at time 0 and the cable is not
+/// reported as a [`CableError`] ([`CableErrorKind::Configuration`]) at time 0 and the cable is not
 /// built.
-#[derive(Component, Debug, Clone)]
+///
+/// ```
+/// use bevy::prelude::*;
+/// use bevy_rapier_cable::cable::RopeMaterial;
+/// use bevy_rapier_cable::plugin::{CableAnchor, CableDescriptor};
+/// # let payload = Entity::PLACEHOLDER;
+/// // 12 m of 16 mm steel wire rope from a world point to a payload's top.
+/// let rope = CableDescriptor::new(12.0)
+///     .material(RopeMaterial::steel_6x36_iwrc(0.016))
+///     .segments(48)
+///     .start(CableAnchor::world(Vec3::new(0.0, 15.0, 0.0)))
+///     .end(CableAnchor::body(payload, Vec3::Y * 0.5))
+///     .damping(0.005);
+/// assert_eq!(rope.segments, 48);
+/// ```
+///
+/// Entity references (the bodies in [`CableAnchor::Body`]) are mapped when
+/// the component is cloned into another world or loaded from a scene
+/// (`MapEntities`).
+#[derive(Component, Debug, Clone, Reflect)]
+#[reflect(Component, Debug)]
 pub struct CableDescriptor {
     /// Unstretched length, m.
     pub length: f64,
-    /// Number of beam elements (≥ 1).
+    /// Number of beam elements (1 to [`MAX_SEGMENTS`]).
     pub segments: usize,
-    /// Section properties (see `cable::preset`).
-    pub section: RopeSection,
-    /// Diameter, m.
-    pub diameter: f64,
+    /// Material and diameter.
+    pub material: RopeMaterial,
     /// Shear stiffness GA, N (default EA).
     pub shear_stiffness: Option<f64>,
     /// Stiffness-proportional damping time constant, s.
@@ -63,8 +115,10 @@ pub struct CableDescriptor {
     /// straight down from the start when the end is free or on a body.
     pub path: Option<Vec<Vec3>>,
     /// Start anchor (a free start needs a `path`).
+    #[entities]
     pub start: CableAnchor,
     /// End anchor.
+    #[entities]
     pub end: CableAnchor,
     /// Time integrator.
     pub scheme: Scheme,
@@ -78,14 +132,15 @@ pub struct CableDescriptor {
     /// ends; bodies rapier keeps held where they are), reached in `n` load
     /// steps ([`Cable::solve_static`](crate::cable::Cable::solve_static)
     /// with the tolerance of `cablesim`, [`crate::sim::STATIC_TOLERANCE`]).
-    /// A cable whose static solve fails is not built (a [`CableDiverged`]
+    /// A cable whose static solve fails is not built (a [`CableError`]
     /// message at time 0). For a cable whose rope is grafted onto another's
     /// chain (a sling leg), the carrying cable's setting counts.
     pub static_start: Option<u32>,
 }
 
 /// A constant point load on a cable (world frame).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Reflect)]
+#[reflect(Debug, PartialEq)]
 pub struct CablePointLoad {
     /// Arc length from the cable's start, m.
     pub s: f64,
@@ -99,7 +154,8 @@ pub struct CablePointLoad {
 /// [`CableDescriptor`] when present: a scenario file's values, so that a
 /// scenario spawned into a Bevy app ([`crate::plugin::scenario`]) gives the
 /// same results as `cablesim`, bit for bit. Games do not need it.
-#[derive(Component, Debug, Clone, Default, PartialEq)]
+#[derive(Component, Debug, Clone, Default, PartialEq, Reflect)]
+#[reflect(Component, Debug, Default, PartialEq)]
 pub struct CableExact {
     /// Initial centreline (world, m), replacing [`CableDescriptor::path`].
     pub path: Option<Vec<DVec3>>,
@@ -115,7 +171,8 @@ pub struct CableExact {
 /// properties, the pose and velocities at the start, and for a fixed or
 /// kinematic body its prescribed motion in closed form. A scenario spawned
 /// into a Bevy app ([`crate::plugin::scenario`]) carries it on every body.
-#[derive(Component, Clone)]
+#[derive(Component, Clone, Reflect)]
+#[reflect(Component, Debug, from_reflect = false)]
 pub struct BodyExact {
     /// Mass, kg.
     pub mass: f64,
@@ -131,6 +188,8 @@ pub struct BodyExact {
     pub angular_velocity: DVec3,
     /// The motion of a fixed or kinematic body (`t` in s ↦ its frame and
     /// rates); the cable end on it follows this instead of sampling rapier.
+    /// (Not reflected: a closure.)
+    #[reflect(ignore)]
     pub motion: Option<BodyMotion>,
 }
 
@@ -149,14 +208,24 @@ impl std::fmt::Debug for BodyExact {
 }
 
 impl CableDescriptor {
-    /// A cable of `length` m with `segments` elements of `section`, from
-    /// `start` to `end`, generalized-α, undamped, tension-only.
-    pub fn new(length: f64, segments: usize, section: RopeSection, diameter: f64, start: CableAnchor, end: CableAnchor) -> Self {
+    /// A cable of `length` m with the defaults: a 20 mm steel wire rope
+    /// ([`RopeMaterial::default`]), elements of about 0.5 m (4 to 100 of
+    /// them, [`CableDescriptor::default_segments`]), pinned at the world
+    /// origin with a free end, undamped, tension-only, generalized-α. Set
+    /// the rest with the builder methods.
+    pub fn new(length: f32) -> Self {
+        let length = length as f64;
+        Self::from_section(length, Self::default_segments(length), RopeMaterial::default(), CableAnchor::world(Vec3::ZERO), CableAnchor::Free)
+    }
+
+    /// A cable from exact (f64) values: `length` m in `segments` elements
+    /// of `material`, from `start` to `end`, undamped, tension-only,
+    /// generalized-α (what [`scenario`](crate::plugin::scenario) uses).
+    pub fn from_section(length: f64, segments: usize, material: RopeMaterial, start: CableAnchor, end: CableAnchor) -> Self {
         CableDescriptor {
             length,
             segments,
-            section,
-            diameter,
+            material,
             shear_stiffness: None,
             damping: 0.0,
             tension_only: true,
@@ -168,6 +237,87 @@ impl CableDescriptor {
             stress_free: false,
             static_start: None,
         }
+    }
+
+    /// The number of elements [`CableDescriptor::new`] gives a cable of
+    /// `length` m: one per 0.5 m, at least 4 and at most 100.
+    pub fn default_segments(length: f64) -> usize {
+        let n = (length / 0.5).round();
+        if n.is_finite() {
+            (n as usize).clamp(4, 100)
+        } else {
+            4
+        }
+    }
+
+    /// Sets the number of beam elements (1 to [`MAX_SEGMENTS`]; more is
+    /// stiffer bending detail and cost linear in the number).
+    pub fn segments(mut self, segments: usize) -> Self {
+        self.segments = segments;
+        self
+    }
+
+    /// Sets the material and diameter.
+    pub fn material(mut self, material: RopeMaterial) -> Self {
+        self.material = material;
+        self
+    }
+
+    /// A section given property by property, drawn with `diameter`, m.
+    pub fn section(self, section: RopeSection, diameter: f32) -> Self {
+        self.material(RopeMaterial::custom(section, diameter as f64))
+    }
+
+    /// Sets the start anchor.
+    pub fn start(mut self, start: CableAnchor) -> Self {
+        self.start = start;
+        self
+    }
+
+    /// Sets the end anchor.
+    pub fn end(mut self, end: CableAnchor) -> Self {
+        self.end = end;
+        self
+    }
+
+    /// Sets the initial centreline (world, m; the `path` field).
+    pub fn path(mut self, path: impl IntoIterator<Item = Vec3>) -> Self {
+        self.path = Some(path.into_iter().collect());
+        self
+    }
+
+    /// Stiffness-proportional damping with time constant `tau`, s (each
+    /// spring's damper is `tau` times its stiffness).
+    pub fn damping(mut self, tau: f32) -> Self {
+        self.damping = tau as f64;
+        self
+    }
+
+    /// Keeps compression (`false`: a rod or a beam) or not (`true`, the
+    /// default: a rope cannot push).
+    pub fn tension_only(mut self, yes: bool) -> Self {
+        self.tension_only = yes;
+        self
+    }
+
+    /// Sets the time integrator (default generalized-α).
+    pub fn scheme(mut self, scheme: Scheme) -> Self {
+        self.scheme = scheme;
+        self
+    }
+
+    /// Starts from the static equilibrium, reached in `load_steps` load
+    /// steps (the `static_start` field).
+    pub fn static_start(mut self, load_steps: u32) -> Self {
+        self.static_start = Some(load_steps);
+        self
+    }
+
+    /// Adds a constant point load `force`, N, at arc length `s`, m, from the
+    /// start (world frame).
+    pub fn point_load(mut self, s: f32, force: Vec3) -> Self {
+        self.loads.push(CablePointLoad { s: s as f64, force: force.as_dvec3(), moment: DVec3::ZERO });
+        self
     }
 }
 
@@ -193,14 +343,21 @@ pub enum CarriedBody {
 
 /// The simulated cable (f64 core) and its couplings. Dereferences to the
 /// core's [`CoupledCable`] (`sim.cable`, `sim.failed`, …).
-#[derive(Component, Debug)]
+///
+/// Reflected as an opaque component (the core's f64 state is not
+/// reflected; read [`CableState`] for the values a game shows).
+#[derive(Component, Debug, Reflect)]
+#[reflect(Component, Debug, from_reflect = false)]
 pub struct CableSim {
     /// The cable and its couplings, as the coupling core keeps them.
+    #[reflect(ignore)]
     pub coupled: CoupledCable,
     /// Bodies coupled to the cable and how.
+    #[reflect(ignore)]
     pub bodies: Vec<(Entity, CarriedBody)>,
     /// A trolley that is the chain's root prismatic link: its entity, which
     /// holds the rapier `ImpulseJoint` whose motor drives it.
+    #[reflect(ignore)]
     pub(crate) rail: Option<Entity>,
 }
 
@@ -251,13 +408,64 @@ pub struct CableState {
     pub newton_iterations: usize,
 }
 
-/// Sent when a cable diverges; the cable stops, its last good state stays.
-#[derive(Message, Debug, Clone)]
-pub struct CableDiverged {
+/// What kind of failure a [`CableError`] reports, so that a game can react
+/// to each (fix a description, clamp an input, or stop a level).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Reflect)]
+#[reflect(Debug, PartialEq, Hash)]
+#[non_exhaustive]
+pub enum CableErrorKind {
+    /// The cable cannot be built as described: a field out of range, an
+    /// anchor on an entity that is no rapier body, a load off the rope, a
+    /// topology the coupling refuses (a loop between two dynamic bodies,
+    /// locked axes on a carried body), a static start that fails, or a
+    /// timestep mode the cables cannot follow. The cable is not built (its
+    /// [`CableDescriptor`] is removed); `time` is 0.
+    Configuration,
+    /// A value the game gave a running cable cannot be used: a non-finite
+    /// `ExternalForce`, `GravityScale`, `Damping`, velocity write or
+    /// impulse on a body the cable carries. The cable stops before the step
+    /// and keeps its last good state.
+    InvalidInput,
+    /// The cable's implicit solve failed (Newton did not converge at any
+    /// split of the step, or the state left physical sense). The cable stops
+    /// and keeps its last good state.
+    Diverged,
+}
+
+/// Sent when a cable fails or is refused; logged through the `log` facade
+/// (Bevy's `LogPlugin` shows it) at error level as well. The cable stops
+/// (or is not built); its last good state stays. `Display` gives one line
+/// with the entity, the kind, the time and the reason.
+#[derive(Message, Debug, Clone, PartialEq, Reflect)]
+#[reflect(Debug, PartialEq)]
+pub struct CableError {
     /// The cable entity.
     pub entity: Entity,
-    /// Simulation time at the start of the failing step, s.
+    /// What kind of failure.
+    pub kind: CableErrorKind,
+    /// Simulation time at the start of the failing step (0 for a cable
+    /// refused at creation), s.
     pub time: f64,
-    /// What failed.
+    /// What failed, naming the value, body or element.
     pub message: String,
 }
+
+impl CableError {
+    /// A new message (not yet sent or logged).
+    pub fn new(entity: Entity, kind: CableErrorKind, time: f64, message: impl Into<String>) -> Self {
+        CableError { entity, kind, time, message: message.into() }
+    }
+}
+
+impl std::fmt::Display for CableError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let kind = match self.kind {
+            CableErrorKind::Configuration => "refused (configuration)",
+            CableErrorKind::InvalidInput => "stopped (invalid input)",
+            CableErrorKind::Diverged => "stopped (diverged)",
+        };
+        write!(f, "cable {} {kind} at t = {} s: {}", self.entity, self.time, self.message)
+    }
+}
+
+impl std::error::Error for CableError {}

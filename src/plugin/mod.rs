@@ -1,5 +1,8 @@
-//! The Bevy plugin: cables as entities, stepped beside bevy_rapier in
-//! `FixedUpdate`, coupled both ways with rapier bodies.
+//! The Bevy plugin: cables as entities, stepped beside bevy_rapier in its
+//! schedule (`FixedUpdate` by default; [`CablePlugin::in_schedule`]),
+//! coupled both ways with rapier bodies. A complete app and the topics of
+//! embedding (schedules, reading cables, despawning, rendering) are in
+//! `docs/embedding.md`.
 //!
 //! ```no_run
 //! use bevy::prelude::*;
@@ -12,7 +15,12 @@
 //!     .run();
 //! ```
 //!
-//! ## Order inside `FixedUpdate` (deterministic, documented)
+//! ## Order inside the schedule (deterministic, documented)
+//! Placed this way by default; with
+//! [`CablePlugin::with_default_system_setup`]`(false)` an app adds
+//! [`CablePlugin::get_systems`] and orders the sets itself. The cables
+//! advance by the time rapier advances (its `TimestepMode`, see
+//! [`CablePlugin`]).
 //! | set | runs | does |
 //! |---|---|---|
 //! | `PhysicsSet::SyncBackend` | bevy_rapier | creates rapier bodies, applies user changes (velocity writes, impulses) |
@@ -33,7 +41,7 @@
 //!   `ExternalImpulse`, a write to its `Velocity`, and the impulses of
 //!   rapier's contacts on it (a ball hitting it) are impulses `M Δv` on
 //!   the cable's link, so rope and body take them together. `LockedAxes`
-//!   on it are refused (a [`CableDiverged`] message at creation). Its
+//!   on it are refused (a [`CableError`] message at creation). Its
 //!   `Transform` and `Velocity` are the cable's after every step.
 //! * A **dynamic body on a prismatic joint** to a fixed body at a cable's
 //!   start (a trolley on its rail) becomes a prismatic link of the chain in
@@ -58,7 +66,7 @@
 //!   world, a fixed or kinematic body, or free). Such a cable entity gets
 //!   [`CableRopeOf`] (the carrying entity and its rope index) and its own
 //!   [`CableState`] instead of a [`CableSim`]. A cable between two hubs (a
-//!   loop through two dynamic bodies) is refused with a [`CableDiverged`]
+//!   loop through two dynamic bodies) is refused with a [`CableError`]
 //!   message naming both, and so are the other cables of that island. A
 //!   body whose cable leads to a dynamic body that is no hub is a hub only
 //!   if that cable ends on it; otherwise it is coupled explicitly. The
@@ -86,6 +94,23 @@
 //!   warning. Respawn the legs you keep to hang it again.
 //!
 //!
+//! ## Errors ([`CableError`], a message with a [`CableErrorKind`])
+//! Every failure is sent as a [`CableError`] message and logged at error
+//! level (`log` facade; Bevy's `LogPlugin` shows it):
+//! * [`CableErrorKind::Configuration`]: the cable cannot be built as
+//!   described (a bad field, an anchor on an entity without a rapier body,
+//!   a load off the rope, a refused topology, locked axes, a failed static
+//!   start). It is not built; its [`CableDescriptor`] is removed.
+//! * [`CableErrorKind::InvalidInput`]: a NaN or infinite `ExternalForce`,
+//!   `GravityScale`, `Damping`, `Velocity` write or `ExternalImpulse` on a
+//!   carried body, named. The cable stops before the step.
+//! * [`CableErrorKind::Diverged`]: the implicit solve failed; the message
+//!   names the time and the reason. The cable stops.
+//!
+//! A stopped cable keeps its last good state ([`CableState`] stays
+//! readable); the ropes solved in its chain (sling legs) stop with it, each
+//! with its own message.
+//!
 //! **Edits after spawning**: a [`CableDescriptor`] changed after its cable
 //! was built is ignored, with a warning (despawn the cable and spawn a new
 //! one to change it).
@@ -97,12 +122,16 @@ pub mod scenario;
 mod systems;
 
 pub use self::components::{
-    BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CablePointLoad, CableRopeOf, CableSim, CableState, CarriedBody,
+    BodyExact, CableAnchor, CableDescriptor, CableError, CableErrorKind, CableExact, CablePointLoad, CableRopeOf, CableSim, CableState, CarriedBody,
 };
+use bevy::ecs::schedule::{InternedScheduleLabel, ScheduleConfigs, ScheduleLabel};
+use bevy::ecs::system::ScheduleSystem;
 use bevy::prelude::*;
+use bevy_rapier3d::plugin::RapierTransformPropagateSet;
 use bevy_rapier3d::prelude::PhysicsSet;
 
-/// System sets of the cable plugin, in execution order (all in `FixedUpdate`).
+/// System sets of the cable plugin, in execution order, in the plugin's
+/// schedule (`FixedUpdate` by default, [`CablePlugin::in_schedule`]).
 #[derive(SystemSet, Debug, Hash, PartialEq, Eq, Clone, Copy)]
 pub enum CableSystems {
     /// Builds new cables from [`CableDescriptor`]s.
@@ -117,30 +146,92 @@ pub enum CableSystems {
     Readout,
 }
 
-/// The cable plugin. Add it after `RapierPhysicsPlugin::in_fixed_schedule()`.
-#[derive(Debug, Clone, Default)]
+/// The cable plugin. Add it after `RapierPhysicsPlugin`, in the same
+/// schedule as rapier's systems: `FixedUpdate` by default, matching
+/// `RapierPhysicsPlugin::in_fixed_schedule()`; [`CablePlugin::in_schedule`]
+/// for another one (bevy_rapier's default is `PostUpdate`).
+///
+/// Each step the cables advance by the time rapier advances, taken from
+/// rapier's `TimestepMode` resource as bevy_rapier's own step does
+/// (`Fixed { dt, .. }`: `dt`; `Variable { max_dt, time_scale, .. }`:
+/// `min(Time::delta_secs() · time_scale, max_dt)`), so the two cannot
+/// drift apart. `TimestepMode::Interpolated` (a varying number of rapier
+/// steps per frame) is refused with a [`CableError`]. Without a
+/// `TimestepMode` resource the schedule's `Time` delta is used.
+#[derive(Debug, Clone)]
 pub struct CablePlugin {
-    /// Cable sub-steps per fixed step (default 1: the implicit solve is
-    /// stable at the frame step).
+    /// Cable sub-steps per step (default 1: the implicit solve is stable at
+    /// the frame step). The chain is advanced in this many sub-steps of the
+    /// rapier step; the exchange with the bodies rapier keeps (explicit
+    /// coupling) stays once per step. `cablesim`'s `[simulation] substeps`
+    /// sub-steps rapier as well: in an app, that is a fixed timestep of
+    /// `dt / substeps` (what [`scenario::add_scenario`] sets).
     pub substeps: u32,
+    schedule: InternedScheduleLabel,
+    default_system_setup: bool,
+}
+
+impl Default for CablePlugin {
+    fn default() -> Self {
+        CablePlugin { substeps: 1, schedule: FixedUpdate.intern(), default_system_setup: true }
+    }
 }
 
 impl CablePlugin {
-    /// Sets the cable sub-steps per fixed step.
+    /// Sets the cable sub-steps per step.
     pub fn with_substeps(mut self, substeps: u32) -> Self {
         self.substeps = substeps;
         self
     }
+
+    /// Runs the cable systems in `FixedUpdate` (the default), with
+    /// `RapierPhysicsPlugin::in_fixed_schedule()`.
+    pub fn in_fixed_schedule(self) -> Self {
+        self.in_schedule(FixedUpdate)
+    }
+
+    /// Runs the cable systems in `schedule`, which must be the schedule of
+    /// rapier's systems (`RapierPhysicsPlugin::in_schedule(schedule)`; an
+    /// error is logged at start-up when rapier's systems are not there).
+    pub fn in_schedule(mut self, schedule: impl ScheduleLabel) -> Self {
+        self.schedule = schedule.intern();
+        self
+    }
+
+    /// With `false`, the plugin registers its types, messages, resources
+    /// and observers but adds no systems and configures no sets: add them
+    /// yourself with [`CablePlugin::get_systems`] and order the sets
+    /// around rapier's `PhysicsSet`s as the module docs' table says (as
+    /// bevy_rapier's `with_default_system_setup`).
+    pub fn with_default_system_setup(mut self, default_system_setup: bool) -> Self {
+        self.default_system_setup = default_system_setup;
+        self
+    }
+
+    /// The systems of one set, already in it, for an app that places them
+    /// itself ([`CablePlugin::with_default_system_setup`]).
+    pub fn get_systems(set: CableSystems) -> ScheduleConfigs<ScheduleSystem> {
+        match set {
+            CableSystems::Init => {
+                (systems::drop_orphans, systems::refuse_edits, systems::init_cables, systems::record_legs).chain().in_set(CableSystems::Init).into_configs()
+            }
+            CableSystems::Step => systems::step_cables.in_set(CableSystems::Step).into_configs(),
+            CableSystems::WriteBodies => systems::write_bodies.in_set(CableSystems::WriteBodies).into_configs(),
+            CableSystems::Readout => systems::readout.in_set(CableSystems::Readout).into_configs(),
+        }
+    }
 }
 
 /// Settings of the running plugin.
-#[derive(Resource, Debug, Clone, Copy)]
+#[derive(Resource, Debug, Clone, Copy, Reflect)]
+#[reflect(Resource, Debug)]
 pub struct CableSettings {
-    /// Cable sub-steps per fixed step.
+    /// Cable sub-steps per step ([`CablePlugin::substeps`]).
     pub substeps: u32,
-    /// The cable step, s, replacing the schedule's `Time` delta when set.
-    /// Bevy keeps time in whole nanoseconds (1/60 s becomes 16 666 667 ns);
-    /// a scenario spawned into the app ([`scenario`]) sets its exact `dt`.
+    /// The cable step, s, replacing the step taken from rapier's
+    /// `TimestepMode` when set. Bevy keeps time in whole nanoseconds (1/60 s
+    /// becomes 16 666 667 ns); a scenario spawned into the app
+    /// ([`scenario`]) sets its exact `dt`.
     pub step: Option<f64>,
     /// Gravity of the cables, m/s², replacing rapier's (f32)
     /// `RapierConfiguration::gravity` when set.
@@ -150,21 +241,41 @@ pub struct CableSettings {
 impl Plugin for CablePlugin {
     fn build(&self, app: &mut App) {
         app.insert_resource(CableSettings { substeps: self.substeps.max(1), step: None, gravity: None });
-        app.register_type::<CableState>().register_type::<CableRopeOf>();
-        app.add_message::<CableDiverged>();
-        app.configure_sets(FixedUpdate, (CableSystems::Init, CableSystems::Step).chain().after(PhysicsSet::SyncBackend).before(PhysicsSet::StepSimulation));
-        app.configure_sets(FixedUpdate, CableSystems::WriteBodies.after(PhysicsSet::StepSimulation).before(PhysicsSet::Writeback));
-        app.configure_sets(FixedUpdate, CableSystems::Readout.after(PhysicsSet::Writeback));
+        app.register_type::<CableDescriptor>()
+            .register_type::<CableSim>()
+            .register_type::<CableState>()
+            .register_type::<CableRopeOf>()
+            .register_type::<CableExact>()
+            .register_type::<BodyExact>()
+            .register_type::<CableSettings>()
+            .register_type::<CableError>()
+            .register_type::<CableErrorKind>();
+        app.add_message::<CableError>();
         app.init_resource::<systems::Legs>();
         app.add_observer(systems::release_cable);
-        app.add_systems(
-            FixedUpdate,
-            (
-                (systems::drop_orphans, systems::refuse_edits, systems::init_cables, systems::record_legs).chain().in_set(CableSystems::Init),
-                systems::step_cables.in_set(CableSystems::Step),
-                systems::write_bodies.in_set(CableSystems::WriteBodies),
-                systems::readout.in_set(CableSystems::Readout),
-            ),
-        );
+        if !self.default_system_setup {
+            return;
+        }
+        let schedule = self.schedule;
+        app.configure_sets(schedule, (CableSystems::Init, CableSystems::Step).chain().after(PhysicsSet::SyncBackend).before(PhysicsSet::StepSimulation));
+        app.configure_sets(schedule, CableSystems::WriteBodies.after(PhysicsSet::StepSimulation).before(PhysicsSet::Writeback));
+        app.configure_sets(schedule, CableSystems::Readout.after(PhysicsSet::Writeback));
+        for set in [CableSystems::Init, CableSystems::Step, CableSystems::WriteBodies, CableSystems::Readout] {
+            app.add_systems(schedule, Self::get_systems(set));
+        }
+    }
+
+    fn finish(&self, app: &mut App) {
+        // Rapier's default setup puts its transform propagation set in its
+        // schedule; the cables' order is only meaningful beside it.
+        // Cables are refused (each with a `CableError`) when they are not.
+        if self.default_system_setup && !app.get_schedule(self.schedule).is_some_and(|s| s.graph().system_sets.contains(RapierTransformPropagateSet)) {
+            let why = format!(
+                "the cable plugin runs in {:?}, but rapier's systems are not in that schedule: put both in the same one (`RapierPhysicsPlugin::in_fixed_schedule()` with `CablePlugin::default()`, or `in_schedule(S)` on both)",
+                self.schedule
+            );
+            log::error!("{why}");
+            app.insert_resource(systems::Misplaced(why));
+        }
     }
 }

@@ -62,9 +62,9 @@
 //! per entity). Everything `cablesim` refuses is refused here too, with the
 //! same message.
 
-use super::components::{BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CablePointLoad, CableRopeOf, CableSim};
+use super::components::{BodyExact, CableAnchor, CableDescriptor, CableError, CableExact, CablePointLoad, CableRopeOf, CableSim};
 use super::{CableSettings, CableSystems};
-use crate::cable::{BodyInChain, Cable, RopeSection, RopeView};
+use crate::cable::{BodyInChain, Cable, RopeMaterial, RopeSection, RopeView};
 use crate::coupling::set_velocity_drive;
 use crate::coupling::Role;
 use crate::integrate::{Scheme, SchemeParams};
@@ -294,7 +294,7 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
             CableEnd::Body { body, anchor, clamp } => (CableAnchor::Body { entity: bodies[body], anchor: anchor.as_vec3(), clamp: *clamp }, Some(*anchor)),
         };
         let ((start, sp), (end, ep)) = (anchor(&c.start), anchor(&c.end));
-        let mut d = CableDescriptor::new(c.length, c.segments as usize, section, c.diameter, start, end);
+        let mut d = CableDescriptor::from_section(c.length, c.segments as usize, RopeMaterial::custom(section, c.diameter), start, end);
         d.shear_stiffness = c.shear_stiffness;
         d.damping = c.damping;
         d.tension_only = c.tension_only;
@@ -387,7 +387,7 @@ fn sample(
     ctx: ReadRapierContext,
     handles: Query<&RapierRigidBodyHandle>,
     joint_handles: Query<&RapierImpulseJointHandle>,
-    mut diverged: MessageReader<CableDiverged>,
+    mut diverged: MessageReader<CableError>,
 ) {
     if let Some(m) = diverged.read().next() {
         if run.failed.is_none() {

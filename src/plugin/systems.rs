@@ -2,7 +2,7 @@
 //! thin adapters that map entities to rapier handles and call the coupling
 //! core ([`crate::coupling`]).
 
-use super::components::{BodyExact, CableAnchor, CableDescriptor, CableDiverged, CableExact, CableRopeOf, CableSim, CableState, CarriedBody};
+use super::components::{BodyExact, CableAnchor, CableDescriptor, CableError, CableErrorKind, CableExact, CableRopeOf, CableSim, CableState, CarriedBody};
 use super::CableSettings;
 use crate::cable::{LumpedBody, RopeBuilder};
 use crate::coupling::{self, rail_motor, Attach, BodyInputs, Built, CableSpec, CoupledCable, CouplingError, Role};
@@ -21,6 +21,11 @@ pub(crate) fn spawn_order(e: Entity) -> (u32, u32) {
     (e.index_u32(), e.generation().to_bits())
 }
 
+/// Set at start-up when the cable systems are not in the schedule of
+/// rapier's systems: why (every new cable is refused with it).
+#[derive(Resource, Debug, Clone)]
+pub(crate) struct Misplaced(pub(crate) String);
+
 /// Cable entities the plugin has not built yet.
 type NotBuilt = (Without<CableSim>, Without<CableRopeOf>);
 
@@ -36,14 +41,38 @@ pub(crate) fn init_cables(
     mut ctx: WriteRapierContext,
     handles: Query<&RapierRigidBodyHandle>,
     exact_bodies: Query<&BodyExact>,
-    config: Query<&RapierConfiguration>,
-    settings: Res<CableSettings>,
-    mut diverged: MessageWriter<CableDiverged>,
+    config: Query<&RapierConfiguration, With<DefaultRapierContext>>,
+    contexts: (Query<Entity, With<DefaultRapierContext>>, Query<&RapierContextEntityLink>),
+    (settings, mode, misplaced): (Res<CableSettings>, Option<Res<TimestepMode>>, Option<Res<Misplaced>>),
+    mut errors: MessageWriter<CableError>,
 ) {
     if new.is_empty() {
         return;
     }
-    let Ok(mut ctx) = ctx.single_mut() else {
+    // What no cable of the batch can be built with: a timestep the cables
+    // cannot follow, or not exactly one default rapier context.
+    let interpolated = match (settings.step, mode.as_deref()) {
+        (None, Some(m @ TimestepMode::Interpolated { .. })) => rapier_step(Some(m), &Time::default()).err(),
+        _ => None,
+    };
+    let default_context = contexts.0.single().ok();
+    let refused = misplaced.map(|m| m.0.clone()).or(interpolated).or_else(|| {
+        default_context.is_none().then(|| {
+            let n = contexts.0.iter().count();
+            format!(
+                "the cable plugin needs exactly one rapier context marked `DefaultRapierContext` (found {n}): add `RapierPhysicsPlugin` before `CablePlugin`"
+            )
+        })
+    });
+    let ctx = match refused {
+        None => ctx.single_mut().ok(),
+        Some(_) => None,
+    };
+    let Some(mut ctx) = ctx else {
+        let why = refused.unwrap_or_else(|| "no rapier context".into());
+        for (entity, _, _) in new.iter() {
+            fail(&mut commands, &mut errors, entity, why.clone());
+        }
         return;
     };
     let gravity = settings.gravity.unwrap_or_else(|| config.iter().next().map_or(DVec3::new(0.0, -9.81, 0.0), |c| c.gravity.as_dvec3()));
@@ -60,6 +89,14 @@ pub(crate) fn init_cables(
                 CableAnchor::World { point: p, clamp } => (Attach::World { point: point.unwrap_or(p.as_dvec3()), clamp: *clamp }, None),
                 CableAnchor::Body { entity: be, anchor, clamp } => {
                     let h = handles.get(*be).map_err(|_| format!("{end} body {be} has no rapier rigid body"))?.0;
+                    if let (Ok(link), Some(default)) = (contexts.1.get(*be), default_context) {
+                        if link.0 != default {
+                            return Err(format!(
+                                "{end} body {be} is in rapier context {}, not in the default context {default}: the cable plugin couples with the default rapier context only (several contexts are not supported yet)",
+                                link.0
+                            ));
+                        }
+                    }
                     (Attach::Body { body: h, anchor: point.unwrap_or(anchor.as_dvec3()), clamp: *clamp }, Some((*be, h)))
                 }
             })
@@ -72,7 +109,7 @@ pub(crate) fn init_cables(
                 "load {i} (s = {} m, force {} N, moment {} N·m): s must be within the cable's length {} m and every value finite",
                 l.s, l.force, l.moment, d.length
             );
-            fail(&mut commands, &mut diverged, entity, message);
+            fail(&mut commands, &mut errors, entity, message);
             continue;
         }
         let points = exact.map_or([None, None], |x| [x.start, x.end]);
@@ -80,11 +117,11 @@ pub(crate) fn init_cables(
         let ((start, sb), (end, eb)) = match ends {
             Ok(x) => x,
             Err(message) => {
-                fail(&mut commands, &mut diverged, entity, message);
+                fail(&mut commands, &mut errors, entity, message);
                 continue;
             }
         };
-        let mut rope = RopeBuilder::new(d.length, d.segments, d.section, d.diameter)
+        let mut rope = RopeBuilder::new(d.length, d.segments, d.material.section(), d.material.diameter())
             .damping(d.damping)
             .gravity(gravity)
             .stress_free_shape(d.stress_free)
@@ -129,7 +166,7 @@ pub(crate) fn init_cables(
             Ok(Built::Cable(cc)) => (Some(*cc), None),
             Ok(Built::Part { onto, part }) => (None, Some((onto, part))),
             Err(e) => {
-                fail(&mut commands, &mut diverged, *entity, message(&e));
+                fail(&mut commands, &mut errors, *entity, message(&e));
                 (None, None)
             }
         };
@@ -166,13 +203,13 @@ pub(crate) fn init_cables(
         cc.keep_loads();
         if let Some(steps) = statics {
             if let Err(e) = cc.cable.solve_static(*steps as usize, STATIC_TOLERANCE, STATIC_MAX_ITERATIONS) {
-                fail(&mut commands, &mut diverged, *entity, format!("static start: {e}"));
+                fail(&mut commands, &mut errors, *entity, format!("static start: {e}"));
                 sims[k] = None;
                 continue;
             }
         }
         if let Err((_, e)) = cc.start_velocities(&velocity) {
-            fail(&mut commands, &mut diverged, *entity, e.to_string());
+            fail(&mut commands, &mut errors, *entity, e.to_string());
             sims[k] = None;
         }
     }
@@ -183,7 +220,7 @@ pub(crate) fn init_cables(
             // A rope grafted onto another entity's chain: that entity must
             // exist (it fails with its ropes).
             if !alive[onto] {
-                fail(&mut commands, &mut diverged, *entity, message(&CouplingError::Island { cable: onto }));
+                fail(&mut commands, &mut errors, *entity, message(&CouplingError::Island { cable: onto }));
             } else {
                 commands.entity(*entity).insert((CableRopeOf { cable: batch[onto], rope: part }, CableState::default()));
             }
@@ -214,11 +251,19 @@ pub(crate) fn init_cables(
     }
 }
 
-/// A cable of a batch is not built: its [`CableDiverged`] message at time 0,
-/// and its descriptor removed so that it is not tried again.
-fn fail(commands: &mut Commands, diverged: &mut MessageWriter<CableDiverged>, entity: Entity, message: String) {
-    diverged.write(CableDiverged { entity, time: 0.0, message });
+/// A cable of a batch is not built: its [`CableError`]
+/// ([`CableErrorKind::Configuration`], time 0), logged, and its descriptor
+/// removed so that it is not tried again.
+fn fail(commands: &mut Commands, errors: &mut MessageWriter<CableError>, entity: Entity, message: String) {
+    report(errors, CableError::new(entity, CableErrorKind::Configuration, 0.0, message));
     commands.entity(entity).remove::<CableDescriptor>();
+}
+
+/// Logs a [`CableError`] (error level, through the `log` facade that
+/// Bevy's `LogPlugin` shows) and sends it.
+pub(crate) fn report(errors: &mut MessageWriter<CableError>, error: CableError) {
+    log::error!("{error}");
+    errors.write(error);
 }
 
 /// Why a cable of the batch `batch` was not built, with entities for the
@@ -243,37 +288,59 @@ pub(crate) fn step_cables(
     ropes: Query<(Entity, &CableRopeOf)>,
     settings: Res<CableSettings>,
     time: Res<Time>,
-    mut diverged: MessageWriter<CableDiverged>,
+    mode: Option<Res<TimestepMode>>,
+    mut errors: MessageWriter<CableError>,
 ) {
-    if time.delta_secs_f64() <= 0.0 {
-        return;
-    }
-    let dt = settings.step.unwrap_or(time.delta_secs_f64());
+    let mut list: Vec<(Entity, Mut<CableSim>)> = cables.iter_mut().collect();
+    list.sort_by_key(|(e, _)| spawn_order(*e));
+    let dt = match (settings.step, rapier_step(mode.as_deref(), &time)) {
+        // A scenario's exact step, on the frames the schedule advances.
+        (Some(h), _) if time.delta_secs_f64() > 0.0 => h,
+        (Some(_), _) => return,
+        (None, Ok(h)) => h,
+        (None, Err(why)) => {
+            for (entity, sim) in list.iter_mut().filter(|(_, s)| !s.failed) {
+                sim.coupled.failed = true;
+                let t = sim.coupled.cable.time();
+                stop(&mut errors, &ropes, CableError::new(*entity, CableErrorKind::Configuration, t, why.clone()));
+            }
+            return;
+        }
+    };
     if dt <= 0.0 {
         return;
     }
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
-    let mut list: Vec<(Entity, Mut<CableSim>)> = cables.iter_mut().collect();
-    list.sort_by_key(|(e, _)| spawn_order(*e));
     let mut given: HashMap<RigidBodyHandle, BodyInputs> = HashMap::new();
-    for (_, sim) in &mut list {
+    for (entity, sim) in &mut list {
         let sim = &mut **sim;
+        let mut invalid = None;
         for (be, _) in sim.bodies.iter().filter(|(_, c)| matches!(c, CarriedBody::Lumped(_))) {
             let (Ok((force, scale, damping)), Ok(h)) = (inputs.get(*be), handles.get(*be)) else {
                 continue;
             };
-            given.insert(
-                h.0,
-                BodyInputs {
-                    force: force.map_or(DVec3::ZERO, |f| f.force.as_dvec3()),
-                    torque: force.map_or(DVec3::ZERO, |f| f.torque.as_dvec3()),
-                    gravity_scale: scale.map_or(1.0, |s| s.0 as f64),
-                    linear_damping: damping.map_or(0.0, |d| d.linear_damping as f64),
-                    angular_damping: damping.map_or(0.0, |d| d.angular_damping as f64),
-                },
-            );
+            let input = BodyInputs {
+                force: force.map_or(DVec3::ZERO, |f| f.force.as_dvec3()),
+                torque: force.map_or(DVec3::ZERO, |f| f.torque.as_dvec3()),
+                gravity_scale: scale.map_or(1.0, |s| s.0 as f64),
+                linear_damping: damping.map_or(0.0, |d| d.linear_damping as f64),
+                angular_damping: damping.map_or(0.0, |d| d.angular_damping as f64),
+            };
+            // The user's velocity writes and impulses are on the rapier
+            // body by now (bevy_rapier's `SyncBackend` applied them).
+            let velocity = ctx.rigidbody_set.bodies.get(h.0).map(|rb| (rb.linvel(), rb.angvel()));
+            invalid = invalid.or_else(|| invalid_input(*be, &input, velocity));
+            given.insert(h.0, input);
+        }
+        if !sim.coupled.failed {
+            if let Some(message) = invalid {
+                sim.coupled.failed = true;
+                let t = sim.coupled.cable.time();
+                stop(&mut errors, &ropes, CableError::new(*entity, CableErrorKind::InvalidInput, t, message));
+                continue;
+            }
         }
         if let (Some(trolley), Some((_, Role::Trolley { offset, .. }))) = (sim.rail, sim.coupled.roles[0]) {
             // The motor along the rail (a `PrismaticJoint`, or any joint
@@ -290,12 +357,54 @@ pub(crate) fn step_cables(
         given.get(&h).copied().unwrap_or_default()
     });
     for (i, t, e) in failures {
-        let owner = list[i].0;
-        diverged.write(CableDiverged { entity: owner, time: t, message: e.to_string() });
-        // The ropes solved in the same chain stop with it.
-        for (entity, _) in ropes.iter().filter(|(_, of)| of.cable == owner) {
-            diverged.write(CableDiverged { entity, time: t, message: format!("solved as one island with cable {owner}, which failed: {e}") });
-        }
+        stop(&mut errors, &ropes, CableError::new(list[i].0, CableErrorKind::Diverged, t, e.to_string()));
+    }
+}
+
+/// The time rapier advances in one run of its step system, s, as
+/// bevy_rapier's `step_simulation` computes it from `TimestepMode` (in
+/// f32, as rapier does), or why the cables cannot follow it. Without the
+/// resource: the schedule's `Time` delta.
+pub(crate) fn rapier_step(mode: Option<&TimestepMode>, time: &Time) -> Result<f64, String> {
+    match mode {
+        None => Ok(time.delta_secs_f64()),
+        Some(TimestepMode::Fixed { dt, .. }) => Ok(*dt as f64),
+        Some(TimestepMode::Variable { max_dt, time_scale, .. }) => Ok((time.delta_secs() * time_scale).min(*max_dt) as f64),
+        Some(TimestepMode::Interpolated { .. }) => Err(
+            "rapier's `TimestepMode::Interpolated` takes a varying number of rapier steps per frame, which the cables cannot follow: use `TimestepMode::Fixed { dt, .. }` (with the cables in `FixedUpdate`, dt = the fixed timestep) or `TimestepMode::Variable`".into(),
+        ),
+    }
+}
+
+/// Why the inputs of carried body `body` cannot enter the cable solve (a
+/// non-finite value, named), or `None`.
+fn invalid_input(body: Entity, input: &BodyInputs, velocity: Option<(Vec3, Vec3)>) -> Option<String> {
+    let named = [
+        ("ExternalForce::force (N)", input.force.is_finite(), format!("{}", input.force)),
+        ("ExternalForce::torque (N·m)", input.torque.is_finite(), format!("{}", input.torque)),
+        ("GravityScale", input.gravity_scale.is_finite(), format!("{}", input.gravity_scale)),
+        ("Damping::linear_damping (1/s)", input.linear_damping.is_finite(), format!("{}", input.linear_damping)),
+        ("Damping::angular_damping (1/s)", input.angular_damping.is_finite(), format!("{}", input.angular_damping)),
+    ];
+    if let Some((what, _, value)) = named.iter().find(|(_, ok, _)| !ok) {
+        return Some(format!("carried body {body}: its {what} is not finite ({value})"));
+    }
+    let (lin, ang) = velocity?;
+    if !(lin.is_finite() && ang.is_finite()) {
+        return Some(format!(
+            "carried body {body}: its velocity is not finite (linear {lin} m/s, angular {ang} rad/s): a `Velocity` write or an `ExternalImpulse` with a NaN or infinite value"
+        ));
+    }
+    None
+}
+
+/// Stops a cable: its [`CableError`], logged, and the same for every rope
+/// solved in its chain (a sling leg stops with the cable that carries it).
+fn stop(errors: &mut MessageWriter<CableError>, ropes: &Query<(Entity, &CableRopeOf)>, error: CableError) {
+    let (owner, kind, time, reason) = (error.entity, error.kind, error.time, error.message.clone());
+    report(errors, error);
+    for (entity, _) in ropes.iter().filter(|(_, of)| of.cable == owner) {
+        report(errors, CableError::new(entity, kind, time, format!("solved as one island with cable {owner}, which stopped: {reason}")));
     }
 }
 

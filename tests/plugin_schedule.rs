@@ -1,0 +1,203 @@
+//! Scheduling as bevy_rapier does it (issue 11): the cable systems in the
+//! schedule the user chooses, the cable step taken from rapier's
+//! `TimestepMode`, the systems placed by hand, and clear refusals of what
+//! the plugin cannot follow (another schedule than rapier's, an
+//! interpolated timestep, a body in another rapier context).
+
+use bevy::prelude::*;
+use bevy::time::TimeUpdateStrategy;
+use bevy_rapier3d::prelude::*;
+use bevy_rapier_cable::cable::RopeSection;
+use bevy_rapier_cable::plugin::*;
+use std::time::Duration;
+
+const L: f32 = 10.0;
+const R: f32 = 0.3;
+const M: f32 = 100.0;
+const EA: f64 = 1e8;
+
+/// A bare app with the given rapier and cable plugins (no `finish` yet).
+fn app_with(rapier: RapierPhysicsPlugin<NoUserData>, cables: CablePlugin, time: TimeUpdateStrategy) -> App {
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, TransformPlugin, rapier, cables));
+    app.insert_resource(time);
+    app
+}
+
+fn ready(mut app: App) -> App {
+    app.finish();
+    app.cleanup();
+    app
+}
+
+/// A 100 kg ball on a light 10 m rope pinned at the origin, hanging at rest
+/// with the rope unstretched. Returns (payload, cable).
+fn spawn_hanging(app: &mut App, extra: impl Bundle) -> (Entity, Entity) {
+    let w = app.world_mut();
+    let payload = w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -(L + R), 0.0), Collider::ball(R), ColliderMassProperties::Mass(M), extra)).id();
+    let section = RopeSection { linear_density: 0.01, ea: EA, ei: 1e-3, ei2: 1e-3, gj: 1e-3, min_breaking_load: 0.0 };
+    let d = CableDescriptor::new(L).segments(20).section(section, 0.01).end(CableAnchor::body(payload, Vec3::Y * R));
+    let cable = w.spawn(d).id();
+    (payload, cable)
+}
+
+fn errors(app: &App) -> Vec<CableError> {
+    app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned().collect()
+}
+
+/// Runs `frames` updates and collects the errors sent.
+fn run(app: &mut App, frames: usize) -> Vec<CableError> {
+    let mut all = Vec::new();
+    for _ in 0..frames {
+        app.update();
+        all.extend(errors(app));
+    }
+    all
+}
+
+/// The payload settles (rope damped by its own waves is not needed: it
+/// starts at rest on an unstretched rope, so it oscillates axially about
+/// the static stretch m g L/EA); the time-averaged height over the last
+/// frames is that static position.
+fn mean_height(app: &mut App, payload: Entity, frames: usize) -> f64 {
+    let mut sum = 0.0;
+    for _ in 0..frames {
+        app.update();
+        sum += app.world().get::<Transform>(payload).unwrap().translation.y as f64;
+    }
+    sum / frames as f64
+}
+
+/// bevy_rapier's own default: physics in `PostUpdate` with
+/// `TimestepMode::Variable`. The cables, put in `PostUpdate` too, advance
+/// by exactly the time rapier advances each frame (`min(Δt · scale,
+/// max_dt)` in f32), and the payload hangs where the rope's stretch puts
+/// it.
+#[test]
+fn cables_in_post_update_follow_rapier_variable_timestep() {
+    let frame = Duration::from_secs_f64(1.0 / 50.0);
+    let mut app = ready(app_with(
+        RapierPhysicsPlugin::<NoUserData>::default(),
+        CablePlugin::default().in_schedule(PostUpdate),
+        TimeUpdateStrategy::ManualDuration(frame),
+    ));
+    let (payload, cable) = spawn_hanging(&mut app, ());
+    let errs = run(&mut app, 2);
+    assert!(errs.is_empty(), "{errs:?}");
+    let t0 = app.world().get::<CableSim>(cable).expect("cable built in PostUpdate").cable.time();
+    let frames = 200;
+    let y = mean_height(&mut app, payload, frames);
+    let sim = app.world().get::<CableSim>(cable).unwrap();
+    // Rapier advances min(Δt · 1, 1/60) per frame: here 1/60 s (Δt = 1/50 s
+    // is longer than max_dt).
+    let h = (frame.as_secs_f32() * 1.0).min(1.0 / 60.0) as f64;
+    let elapsed = sim.cable.time() - t0;
+    println!("cable time advanced {elapsed} s in {frames} frames; rapier's step {h} s; mean payload height {y:.6} m");
+    assert!((elapsed - frames as f64 * h).abs() < 1e-9, "cable time {elapsed} vs {}", frames as f64 * h);
+    let stretch = M as f64 * 9.81 * L as f64 / EA;
+    let y_ref = -((L + R) as f64) - stretch;
+    assert!((y - y_ref).abs() < 0.2 * stretch + 1e-5, "payload at {y} vs {y_ref}");
+    assert!(!sim.failed);
+}
+
+/// `TimestepMode::Fixed { dt: 1/60 }` with Bevy's default fixed clock
+/// (64 Hz): rapier steps 1/60 s per fixed step, and so do the cables (not
+/// the 1/64 s of `Time<Fixed>`): the two cannot drift apart.
+#[test]
+fn the_cable_step_is_rapier_fixed_dt_not_the_schedule_delta() {
+    let mut app = app_with(RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default(), TimeUpdateStrategy::FixedTimesteps(1));
+    let dt = 1.0f32 / 60.0;
+    app.insert_resource(TimestepMode::Fixed { dt, substeps: 1 });
+    let mut app = ready(app);
+    assert_eq!(app.world().resource::<Time<Fixed>>().timestep(), Duration::from_micros(15625), "Bevy's default 64 Hz");
+    let (_, cable) = spawn_hanging(&mut app, ());
+    let errs = run(&mut app, 3);
+    assert!(errs.is_empty(), "{errs:?}");
+    let t0 = app.world().get::<CableSim>(cable).unwrap().cable.time();
+    run(&mut app, 64);
+    let elapsed = app.world().get::<CableSim>(cable).unwrap().cable.time() - t0;
+    println!("64 fixed steps: cable advanced {elapsed} s (rapier: 64 × {dt} s)");
+    assert!((elapsed - 64.0 * dt as f64).abs() < 1e-9, "{elapsed}");
+}
+
+/// `TimestepMode::Interpolated` (a varying number of rapier steps per
+/// frame) is refused by name when a cable is created, as a configuration
+/// error; the cable is not built.
+#[test]
+fn an_interpolated_timestep_is_refused_by_name() {
+    let mut app = app_with(RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default(), TimeUpdateStrategy::FixedTimesteps(1));
+    app.insert_resource(TimestepMode::Interpolated { dt: 1.0 / 64.0, time_scale: 1.0, substeps: 1 });
+    let mut app = ready(app);
+    let (_, cable) = spawn_hanging(&mut app, ());
+    let errs = run(&mut app, 3);
+    println!("{}", errs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"));
+    assert_eq!(errs.len(), 1, "{errs:?}");
+    assert_eq!((errs[0].entity, errs[0].kind), (cable, CableErrorKind::Configuration));
+    assert!(errs[0].message.contains("TimestepMode::Interpolated"), "{}", errs[0]);
+    assert!(app.world().get::<CableSim>(cable).is_none());
+}
+
+/// Rapier in `PostUpdate` (its default) and the cables in `FixedUpdate`
+/// (theirs): the cables could not be ordered around rapier's step, so
+/// every cable is refused with a message that says how to fix it.
+#[test]
+fn cables_outside_rapier_schedule_are_refused_with_the_fix() {
+    let mut app = ready(app_with(RapierPhysicsPlugin::<NoUserData>::default(), CablePlugin::default(), TimeUpdateStrategy::FixedTimesteps(1)));
+    let (_, cable) = spawn_hanging(&mut app, ());
+    let errs = run(&mut app, 3);
+    println!("{}", errs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"));
+    assert_eq!(errs.len(), 1, "{errs:?}");
+    assert_eq!((errs[0].entity, errs[0].kind), (cable, CableErrorKind::Configuration));
+    assert!(errs[0].message.contains("not in that schedule") && errs[0].message.contains("in_fixed_schedule"), "{}", errs[0]);
+    assert!(app.world().get::<CableSim>(cable).is_none());
+}
+
+/// A payload in a second rapier context: the plugin couples with the
+/// default context only, and says so, naming the body and the context
+/// (instead of reading another body with the same handle).
+#[test]
+fn a_body_in_another_rapier_context_is_refused_by_name() {
+    let mut app =
+        ready(app_with(RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default(), TimeUpdateStrategy::FixedTimesteps(1)));
+    app.update();
+    let other = app.world_mut().spawn(RapierContextSimulation::default()).id();
+    let (payload, cable) = spawn_hanging(&mut app, RapierContextEntityLink(other));
+    let errs = run(&mut app, 3);
+    println!("{}", errs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"));
+    assert_eq!(errs.len(), 1, "{errs:?}");
+    assert_eq!((errs[0].entity, errs[0].kind), (cable, CableErrorKind::Configuration));
+    let m = &errs[0].message;
+    assert!(m.contains(&format!("{payload}")) && m.contains(&format!("{other}")) && m.contains("default rapier context"), "{m}");
+}
+
+/// `with_default_system_setup(false)`: the app places the cable systems
+/// itself ([`CablePlugin::get_systems`]), here in `FixedUpdate` around
+/// rapier's sets as the plugin would, and the payload hangs as with the
+/// default setup, bit for bit.
+#[test]
+fn systems_placed_by_hand_run_like_the_default_setup() {
+    let hang = |manual: bool| {
+        let cables = CablePlugin::default().with_default_system_setup(!manual);
+        let mut app = app_with(RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), cables, TimeUpdateStrategy::FixedTimesteps(1));
+        app.insert_resource(TimestepMode::Fixed { dt: 1.0 / 64.0, substeps: 1 });
+        if manual {
+            app.configure_sets(FixedUpdate, (CableSystems::Init, CableSystems::Step).chain().after(PhysicsSet::SyncBackend).before(PhysicsSet::StepSimulation));
+            app.configure_sets(FixedUpdate, CableSystems::WriteBodies.after(PhysicsSet::StepSimulation).before(PhysicsSet::Writeback));
+            app.configure_sets(FixedUpdate, CableSystems::Readout.after(PhysicsSet::Writeback));
+            for set in [CableSystems::Init, CableSystems::Step, CableSystems::WriteBodies, CableSystems::Readout] {
+                app.add_systems(FixedUpdate, CablePlugin::get_systems(set));
+            }
+        }
+        let mut app = ready(app);
+        let (payload, cable) = spawn_hanging(&mut app, Velocity::linear(Vec3::X));
+        let errs = run(&mut app, 60);
+        assert!(errs.is_empty(), "{errs:?}");
+        let state = app.world().get::<CableState>(cable).expect("readout ran").clone();
+        (app.world().get::<Transform>(payload).unwrap().translation, state.nodes, state.time)
+    };
+    let (a, b) = (hang(false), hang(true));
+    println!("default setup: payload {:?} at t = {}; by hand: {:?} at t = {}", a.0, a.2, b.0, b.2);
+    assert!(a.2 > 0.5, "the cable ran: t = {}", a.2);
+    assert!(a.0.x > 0.1, "the pushed payload swung: {:?}", a.0);
+    assert_eq!(a, b);
+}
