@@ -12,17 +12,34 @@
 //!
 //! Layers (data flows down):
 //!
-//! | module | knows | what |
-//! |---|---|---|
-//! | [`scenario`] | serde | the TOML scenario contract, validation with file:line:col |
-//! | [`output`] | — | results.csv, summary.json, plot.png |
-//! | [`cable`] | — | the rope model and its O(n) implicit solve (f64) |
-//! | [`integrate`] | — | time integrators for any second-order system |
+//! | module | feature | knows | what |
+//! |---|---|---|---|
+//! | `plugin` | `app` | Bevy, bevy_rapier3d | the Bevy plugin: cables as entities; `plugin::scenario` (also `sim`) spawns a scenario file into an app |
+//! | `output` | `cli` | csv, serde_json, plotters | results.csv, summary.json, plot.png of `cablesim` |
+//! | `sim` | `sim` | rapier3d | the Bevy-free scenario runner (`sim::World`, probes); with `rapier` alone, only the static-solve settings the plugin shares |
+//! | `coupling` | `rapier` | rapier3d | the coupling core: cables stepped beside rapier's sets, shared by `sim` and `plugin` |
+//! | `scenario` | `scenario` | serde, toml | the TOML scenario contract, validation with file:line:col |
+//! | [`cable`] | — | — | the rope model and its O(n) implicit solve (f64) |
+//! | [`integrate`] | — | — | time integrators for any second-order system |
 //!
-//! With the feature `rapier` the crate also has the coupling core
-//! ([`coupling`]: cables stepped beside rapier's sets, no Bevy) and the
-//! scenario runner `sim`; with the default feature `app`, the Bevy plugin
-//! and the `cablesim` runner, both thin adapters over the same core.
+//! ## Features
+//!
+//! | feature | adds | brings |
+//! |---|---|---|
+//! | (none) | `cable`, `integrate` | glam, thiserror |
+//! | `scenario` | `scenario` | serde, toml |
+//! | `rapier` | `coupling` | rapier3d |
+//! | `sim` | `scenario` + `rapier` + `sim` | — |
+//! | `app` | `rapier` + `plugin` (and `plugin::scenario` with `sim`) | bevy, bevy_rapier3d, log |
+//! | `cli` | `app` + `sim` + `output` and the `cablesim` binary | clap, indicatif, csv, serde_json, plotters |
+//!
+//! The default features are `app` and `cli`, so that `cargo run --release --
+//! run file.toml` and `cargo test --release` work as they are. A game needs
+//! only the plugin, without any command-line crate:
+//!
+//! ```toml
+//! bevy_rapier_cable = { version = "0.1", default-features = false, features = ["app"] }
+//! ```
 #![warn(missing_docs)]
 
 /// The f64 vector types of the rope API (`DVec3`, `DMat3`, `DQuat`), the
@@ -34,10 +51,13 @@ pub mod cable;
 #[cfg(feature = "rapier")]
 pub mod coupling;
 pub mod integrate;
+#[cfg(feature = "cli")]
 pub mod output;
 #[cfg(feature = "app")]
 pub mod plugin;
+#[cfg(feature = "scenario")]
 pub mod scenario;
+// With `rapier` alone: the static-solve settings the plugin shares.
 #[cfg(feature = "rapier")]
 pub mod sim;
 

@@ -598,7 +598,7 @@ fn spin_motion_parses_in_radians_with_a_unit_axis() {
 
 /// What `sim::World` (rapier bodies and joints) still refuses, with the
 /// file position.
-#[cfg(feature = "rapier")]
+#[cfg(feature = "sim")]
 mod world_refusals {
     use bevy_rapier_cable::scenario::parse;
     use bevy_rapier_cable::sim::{SimError, World};

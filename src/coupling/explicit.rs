@@ -3,6 +3,8 @@
 //! or end-spring target over a step, and the cable's reaction goes back to
 //! the body; and the drive of a trolley absorbed into a cable's chain.
 //! Used by the coupling core.
+// With `rapier` alone (neither the plugin nor the runner) no rail is driven.
+#![cfg_attr(not(any(feature = "app", feature = "sim")), allow(dead_code, unused_imports))]
 
 use super::CoupledCable;
 use crate::cable::chain::{rotation_vector, BaseMotion, SampledMotion, IN_CHAIN};
@@ -140,6 +142,7 @@ pub(crate) fn rail_motor(cc: &mut CoupledCable, motor: Option<rp::JointMotor>, o
 
 /// The rapier joint motor of a scenario velocity drive over a step of `h`
 /// s ([`set_velocity_drive`] on a joint's x axis), as a joint stores it.
+#[cfg(feature = "sim")]
 pub(crate) fn velocity_drive_motor(target: f64, max_force: f64, h: f64) -> rp::JointMotor {
     let mut data = rp::GenericJoint::default();
     set_velocity_drive(&mut data, rp::JointAxis::LinX, target, max_force, h);
@@ -150,6 +153,7 @@ pub(crate) fn velocity_drive_motor(target: f64, max_force: f64, h: f64) -> rp::J
 /// `axis` over a step of `h` s: target `target` (m/s or rad/s),
 /// acceleration-based damping `1/h` (the velocity error halves every
 /// step), saturating at `max_force` (N or N·m), in rapier's f32.
+#[cfg(feature = "sim")]
 pub(crate) fn set_velocity_drive(data: &mut rp::GenericJoint, axis: rp::JointAxis, target: f64, max_force: f64, h: f64) {
     data.set_motor_model(axis, rp::MotorModel::AccelerationBased);
     data.set_motor_velocity(axis, target as f32, (1.0 / h) as f32);

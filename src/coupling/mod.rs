@@ -77,7 +77,11 @@
 
 mod explicit;
 
-pub(crate) use self::explicit::{follow, rail_motor, reaction, set_velocity_drive, velocity_drive_motor, BodySample};
+#[cfg_attr(not(any(feature = "app", feature = "sim")), allow(unused_imports))]
+pub(crate) use self::explicit::{follow, rail_motor, reaction, BodySample};
+// Scenario velocity drives (the runner and `plugin::scenario`):
+#[cfg(feature = "sim")]
+pub(crate) use self::explicit::{set_velocity_drive, velocity_drive_motor};
 use crate::cable::chain::rotation_vector;
 use crate::cable::{
     BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeModel, RopeStart,

@@ -152,7 +152,7 @@ pub struct CablePointLoad {
 
 /// Exact (f64) inputs of a cable, replacing the f32 values of its
 /// [`CableDescriptor`] when present: a scenario file's values, so that a
-/// scenario spawned into a Bevy app ([`crate::plugin::scenario`]) gives the
+/// scenario spawned into a Bevy app (`plugin::scenario`) gives the
 /// same results as `cablesim`, bit for bit. Games do not need it.
 #[derive(Component, Debug, Clone, Default, PartialEq, Reflect)]
 #[reflect(Component, Debug, Default, PartialEq)]
@@ -170,7 +170,7 @@ pub struct CableExact {
 /// replacing what the plugin would read from rapier (f32): mass
 /// properties, the pose and velocities at the start, and for a fixed or
 /// kinematic body its prescribed motion in closed form. A scenario spawned
-/// into a Bevy app ([`crate::plugin::scenario`]) carries it on every body.
+/// into a Bevy app (`plugin::scenario`) carries it on every body.
 #[derive(Component, Clone, Reflect)]
 #[reflect(Component, Debug, from_reflect = false)]
 pub struct BodyExact {
@@ -220,7 +220,7 @@ impl CableDescriptor {
 
     /// A cable from exact (f64) values: `length` m in `segments` elements
     /// of `material`, from `start` to `end`, undamped, tension-only,
-    /// generalized-α (what [`scenario`](crate::plugin::scenario) uses).
+    /// generalized-α (what `plugin::scenario` uses).
     pub fn from_section(length: f64, segments: usize, material: RopeMaterial, start: CableAnchor, end: CableAnchor) -> Self {
         CableDescriptor {
             length,

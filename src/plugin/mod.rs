@@ -118,6 +118,7 @@
 //! Tested in `tests/plugin_lifecycle.rs`.
 
 mod components;
+#[cfg(feature = "sim")]
 pub mod scenario;
 mod systems;
 
@@ -165,7 +166,7 @@ pub struct CablePlugin {
     /// rapier step; the exchange with the bodies rapier keeps (explicit
     /// coupling) stays once per step. `cablesim`'s `[simulation] substeps`
     /// sub-steps rapier as well: in an app, that is a fixed timestep of
-    /// `dt / substeps` (what [`scenario::add_scenario`] sets).
+    /// `dt / substeps` (what `plugin::scenario::add_scenario` sets).
     pub substeps: u32,
     schedule: InternedScheduleLabel,
     default_system_setup: bool,
@@ -231,7 +232,7 @@ pub struct CableSettings {
     /// The cable step, s, replacing the step taken from rapier's
     /// `TimestepMode` when set. Bevy keeps time in whole nanoseconds (1/60 s
     /// becomes 16 666 667 ns); a scenario spawned into the app
-    /// ([`scenario`]) sets its exact `dt`.
+    /// (`plugin::scenario`) sets its exact `dt`.
     pub step: Option<f64>,
     /// Gravity of the cables, m/s², replacing rapier's (f32)
     /// `RapierConfiguration::gravity` when set.

@@ -125,6 +125,7 @@
 
 use super::probe::Probe;
 use super::rapier::RapierWorld;
+use super::{STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};
 use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
 use crate::coupling::{rail_motor, velocity_drive_motor, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
 use crate::integrate::{Scheme, SchemeParams, Substeps};
@@ -219,12 +220,6 @@ pub enum SimError {
         source: Box<CableError>,
     },
 }
-
-/// Convergence tolerance of the static solve (`statics = true`): no
-/// coordinate moves by more than this in the last iteration, m or rad.
-pub const STATIC_TOLERANCE: f64 = 1e-9;
-/// Iteration limit of the static solve, per load step.
-pub const STATIC_MAX_ITERATIONS: usize = 500;
 
 /// Rotational inertia (kg·m², body frame, about the centre) of a uniform
 /// solid of mass `mass` (kg) and shape `shape`.
@@ -625,6 +620,7 @@ impl World {
     /// Names of the prismatic joints of the trolleys the cables carry (the
     /// rails whose coordinate is the chain's root sub-joint; their drives
     /// act in the chain).
+    #[cfg(feature = "app")] // for `plugin::scenario`
     pub(crate) fn rails(&self) -> Vec<&str> {
         self.names.iter().filter_map(|n| n.slide.as_ref().map(|(j, _)| j.as_str())).collect()
     }
