@@ -114,3 +114,24 @@ fn an_interrupted_run_keeps_its_rows() {
     let kept = std::fs::read_to_string(&csv).unwrap();
     assert!(kept.starts_with("time,") && kept.lines().count() > 3, "{kept}");
 }
+
+/// A scenario that cannot be read (not UTF-8, missing, a folder) exits with
+/// status 2 and a message naming the file and the cause.
+#[test]
+fn unreadable_scenario_exits_2_naming_file_and_cause() {
+    let dir = tmp("unreadable");
+    let latin1 = dir.join("latin1.toml");
+    std::fs::write(&latin1, b"[simulation]\nduration = 1.0\n# caf\xe9\n").unwrap();
+    let folder = dir.join("folder.toml");
+    std::fs::create_dir_all(&folder).unwrap();
+    let missing = dir.join("missing.toml");
+    for (f, cause) in [(&latin1, "valid UTF-8"), (&folder, "directory"), (&missing, "No such file")] {
+        for cmd in ["check", "run"] {
+            let o = cablesim().arg(cmd).arg(f).output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            println!("{err}");
+            assert_eq!(o.status.code(), Some(2), "{cmd} {f:?}");
+            assert!(err.contains("cannot read") && err.contains(&*f.to_string_lossy()) && err.contains(cause), "{err}");
+        }
+    }
+}

@@ -121,3 +121,28 @@ fn body_anchors_are_remapped_with_the_descriptor() {
     <CableDescriptor as Component>::map_entities(&mut w, &mut map);
     assert_eq!(w.start, CableAnchor::world(Vec3::ZERO));
 }
+
+/// A second rope spawned later on a body a cable already carries is
+/// refused as a configuration error that names the carrying cable's entity
+/// (not the core's index) and says how to hang the body on both.
+#[test]
+fn a_later_rope_on_a_carried_body_names_the_carrying_cable() {
+    let mut app = plugin_app::headless_app(1.0 / 60.0);
+    let payload =
+        app.world_mut().spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -5.3, 0.0), Collider::ball(0.3), ColliderMassProperties::Mass(200.0))).id();
+    let first = app.world_mut().spawn(CableDescriptor::new(5.0).end(CableAnchor::body(payload, Vec3::Y * 0.3))).id();
+    for _ in 0..3 {
+        app.update();
+    }
+    let second = app.world_mut().spawn(CableDescriptor::new(5.0).start(CableAnchor::world(Vec3::X * 3.0)).end(CableAnchor::body(payload, Vec3::Y * 0.3))).id();
+    let mut errors = Vec::new();
+    for _ in 0..2 {
+        app.update();
+        errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
+    }
+    println!("{}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"));
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert_eq!((errors[0].entity, errors[0].kind), (second, CableErrorKind::Configuration));
+    assert!(errors[0].message.contains(&format!("cable {first} already carries")) && errors[0].message.contains("same frame"), "{}", errors[0]);
+    assert!(!app.world().get::<CableSim>(first).unwrap().failed, "the first cable runs on");
+}

@@ -343,6 +343,9 @@ pub struct CoupledCable {
     fixed_loads: usize,
     /// Stopped after a failed step.
     pub failed: bool,
+    /// The failure of this step's advance (time of the failing sub-step),
+    /// collected in cable order after every cable advanced.
+    advance_failure: Option<(f64, CableError)>,
 }
 
 impl CoupledCable {
@@ -942,7 +945,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         .collect();
     let cable = Cable::new(model, spec.scheme.clone()).map_err(|e| CouplingError::Cable(Box::new(e)))?;
     let fixed_loads = cable.model.chain.loads().len();
-    Ok(CoupledCable { cable, roles, parts, carried, followers, fixed_loads, failed: false })
+    Ok(CoupledCable { cable, roles, parts, carried, followers, fixed_loads, failed: false, advance_failure: None })
 }
 
 /// Phase 1 of a step of length `h`, before rapier steps: samples the
@@ -961,6 +964,40 @@ pub fn step_cables(
     h: f64,
     substeps: u32,
     inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
+) -> Vec<(usize, f64, CableError)> {
+    step_cables_with(cables, bodies, joints, h, substeps, inputs, &OneByOne)
+}
+
+/// Runs a job on every cable of a step: one after the other, or at once on
+/// a thread pool (the cables of a step share no data while their own
+/// solves run; the results are bit-identical either way).
+pub trait ForEachCable: Sync {
+    /// Calls `job` once on every cable.
+    fn for_each(&self, cables: &mut [&mut CoupledCable], job: &(dyn Fn(&mut CoupledCable) + Sync));
+}
+
+/// [`ForEachCable`] one after the other, on the calling thread.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct OneByOne;
+
+impl ForEachCable for OneByOne {
+    fn for_each(&self, cables: &mut [&mut CoupledCable], job: &(dyn Fn(&mut CoupledCable) + Sync)) {
+        for cc in cables.iter_mut() {
+            job(cc);
+        }
+    }
+}
+
+/// [`step_cables`], with the cables' own solves (the costly part) run by
+/// `each`: the Bevy plugin runs them on Bevy's compute task pool.
+pub fn step_cables_with(
+    cables: &mut [&mut CoupledCable],
+    bodies: &mut rp::RigidBodySet,
+    joints: &mut rp::ImpulseJointSet,
+    h: f64,
+    substeps: u32,
+    inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
+    each: &dyn ForEachCable,
 ) -> Vec<(usize, f64, CableError)> {
     // 1. Sample every follower before any cable moves a body.
     for cc in cables.iter_mut().filter(|c| !c.failed) {
@@ -982,8 +1019,7 @@ pub fn step_cables(
     // 2. Carried bodies: impulses and loads; step the cables.
     let n = substeps.max(1);
     let mut failures = Vec::new();
-    for (ci, cc) in cables.iter_mut().enumerate().filter(|(_, c)| !c.failed) {
-        let t = cc.cable.time();
+    for cc in cables.iter_mut().filter(|c| !c.failed) {
         cc.cable.model.chain.loads_mut().truncate(cc.fixed_loads);
         // Rapier may have re-read the user's joint motor and body settings.
         if let Some((_, Role::Trolley { joint, .. })) = cc.roles[0] {
@@ -1023,22 +1059,34 @@ pub fn step_cables(
                 cc.cable.model.chain.loads_mut().push(LinkLoad { link, force, local_point, moment });
             }
         }
-        let fail = |cc: &mut CoupledCable, time: f64, e: CableError| {
-            cc.failed = true;
-            (ci, time, e)
-        };
+    }
+    // The cables' own solves: independent of each other and of rapier (every
+    // body a cable reads was sampled or handed over above), so they may run
+    // at once; the results do not depend on the order.
+    let advance = |cc: &mut CoupledCable| {
+        if cc.failed {
+            return;
+        }
+        let t = cc.cable.time();
         if cc.cable.steps == 0 {
             if let Err(e) = cc.cable.recompute_acceleration() {
-                failures.push(fail(cc, t, e));
-                continue;
+                cc.advance_failure = Some((t, e));
+                return;
             }
         }
         let hs = h / n as f64;
         for k in 0..n {
             if let Err(e) = cc.cable.step(hs) {
-                failures.push(fail(cc, t + k as f64 * hs, e));
-                break;
+                cc.advance_failure = Some((t + k as f64 * hs, e));
+                return;
             }
+        }
+    };
+    each.for_each(cables, &advance);
+    for (ci, cc) in cables.iter_mut().enumerate() {
+        if let Some((time, e)) = cc.advance_failure.take() {
+            cc.failed = true;
+            failures.push((ci, time, e));
         }
     }
     // 3. Hand the carried bodies to rapier; explicit reactions.

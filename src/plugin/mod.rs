@@ -168,13 +168,17 @@ pub struct CablePlugin {
     /// sub-steps rapier as well: in an app, that is a fixed timestep of
     /// `dt / substeps` (what `plugin::scenario::add_scenario` sets).
     pub substeps: u32,
+    /// Step independent cables (islands) at once on Bevy's compute task
+    /// pool (default `true`); the results are bit-identical to stepping
+    /// them one after the other.
+    pub parallel: bool,
     schedule: InternedScheduleLabel,
     default_system_setup: bool,
 }
 
 impl Default for CablePlugin {
     fn default() -> Self {
-        CablePlugin { substeps: 1, schedule: FixedUpdate.intern(), default_system_setup: true }
+        CablePlugin { substeps: 1, parallel: true, schedule: FixedUpdate.intern(), default_system_setup: true }
     }
 }
 
@@ -182,6 +186,13 @@ impl CablePlugin {
     /// Sets the cable sub-steps per step.
     pub fn with_substeps(mut self, substeps: u32) -> Self {
         self.substeps = substeps;
+        self
+    }
+
+    /// Steps independent cables on Bevy's compute task pool (`true`, the
+    /// default) or one after the other on the system's thread.
+    pub fn with_parallel(mut self, parallel: bool) -> Self {
+        self.parallel = parallel;
         self
     }
 
@@ -229,6 +240,8 @@ impl CablePlugin {
 pub struct CableSettings {
     /// Cable sub-steps per step ([`CablePlugin::substeps`]).
     pub substeps: u32,
+    /// Independent cables stepped at once ([`CablePlugin::parallel`]).
+    pub parallel: bool,
     /// The cable step, s, replacing the step taken from rapier's
     /// `TimestepMode` when set. Bevy keeps time in whole nanoseconds (1/60 s
     /// becomes 16 666 667 ns); a scenario spawned into the app
@@ -241,7 +254,7 @@ pub struct CableSettings {
 
 impl Plugin for CablePlugin {
     fn build(&self, app: &mut App) {
-        app.insert_resource(CableSettings { substeps: self.substeps.max(1), step: None, gravity: None });
+        app.insert_resource(CableSettings { substeps: self.substeps.max(1), parallel: self.parallel, step: None, gravity: None });
         app.register_type::<CableDescriptor>()
             .register_type::<CableSim>()
             .register_type::<CableState>()

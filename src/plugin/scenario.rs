@@ -227,7 +227,7 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
     app.insert_resource(Time::<Fixed>::from_duration(Duration::from_secs_f64(h)));
     app.insert_resource(TimestepMode::Fixed { dt: h as f32, substeps: 1 });
     {
-        let mut settings = app.world_mut().get_resource_or_insert_with(|| CableSettings { substeps: 1, step: None, gravity: None });
+        let mut settings = app.world_mut().get_resource_or_insert_with(|| CableSettings { substeps: 1, parallel: true, step: None, gravity: None });
         settings.substeps = 1;
         settings.step = Some(h);
         settings.gravity = Some(gravity);

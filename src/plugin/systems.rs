@@ -5,7 +5,7 @@
 use super::components::{BodyExact, CableAnchor, CableDescriptor, CableError, CableErrorKind, CableExact, CableRopeOf, CableSim, CableState, CarriedBody};
 use super::CableSettings;
 use crate::cable::{LumpedBody, RopeBuilder};
-use crate::coupling::{self, rail_motor, Attach, BodyInputs, Built, CableSpec, CoupledCable, CouplingError, Role};
+use crate::coupling::{self, rail_motor, Attach, BodyInputs, Built, CableSpec, CoupledCable, CouplingError, ForEachCable, OneByOne, Role};
 use crate::sim::{STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
@@ -37,7 +37,7 @@ type NotBuilt = (Without<CableSim>, Without<CableRopeOf>);
 pub(crate) fn init_cables(
     mut commands: Commands,
     new: Query<(Entity, &CableDescriptor, Option<&CableExact>), NotBuilt>,
-    existing: Query<&CableSim>,
+    existing: Query<(Entity, &CableSim)>,
     mut ctx: WriteRapierContext,
     handles: Query<&RapierRigidBodyHandle>,
     exact_bodies: Query<&BodyExact>,
@@ -150,13 +150,14 @@ pub(crate) fn init_cables(
         specs.push(CableSpec { rope, path, start, end, scheme: d.scheme.clone(), exact: exact_ends });
         owners.push((entity, [sb, eb], d.loads.clone(), d.static_start));
     }
-    let others: Vec<&CoupledCable> = existing.iter().map(|s| &s.coupled).collect();
+    let others: Vec<&CoupledCable> = existing.iter().map(|(_, s)| &s.coupled).collect();
+    let carriers: Vec<Entity> = existing.iter().map(|(e, _)| e).collect();
     let built = coupling::build_cables(&specs, &others, &mut ctx.rigidbody_set.bodies, &mut ctx.joints.impulse_joints, &motions);
     let bodies = &ctx.rigidbody_set.bodies;
     // Entities of the bodies and cables of the batch, for messages.
     let entity_of: HashMap<RigidBodyHandle, Entity> = owners.iter().flat_map(|(_, ends, _, _)| ends.iter().flatten().map(|(e, h)| (*h, *e))).collect();
     let batch: Vec<Entity> = owners.iter().map(|(e, _, _, _)| *e).collect();
-    let message = |e: &CouplingError| refusal(e, &entity_of, &batch);
+    let message = |e: &CouplingError| refusal(e, &entity_of, &batch, &carriers);
     // 1. Build: the cables with their own chain, and the ropes grafted
     //    onto another batch member's chain (onto, rope index).
     let mut sims: Vec<Option<CoupledCable>> = Vec::new();
@@ -268,7 +269,13 @@ pub(crate) fn report(errors: &mut MessageWriter<CableError>, error: CableError) 
 
 /// Why a cable of the batch `batch` was not built, with entities for the
 /// core's rapier handles and batch indices.
-fn refusal(e: &CouplingError, entity_of: &HashMap<RigidBodyHandle, Entity>, batch: &[Entity]) -> String {
+fn refusal(e: &CouplingError, entity_of: &HashMap<RigidBodyHandle, Entity>, batch: &[Entity], carriers: &[Entity]) -> String {
+    if let CouplingError::BodyTaken { end, cable } = e {
+        let by = carriers.get(*cable).map_or_else(|| format!("#{cable}"), |c| c.to_string());
+        return format!(
+            "the cable's {end} is attached to a body that cable {by} already carries as a link of its chain (cables are solved together with a body only when spawned in the same frame: despawn cable {by} and spawn all the body's cables together)"
+        );
+    }
     let body = |h: RigidBodyHandle| format!("body {}", entity_of.get(&h).map_or_else(|| format!("{h:?}"), |e| e.to_string()));
     e.describe(&body, &|k| format!("cable {}", batch[k]))
 }
@@ -353,9 +360,16 @@ pub(crate) fn step_cables(
         }
     }
     let mut refs: Vec<&mut CoupledCable> = list.iter_mut().map(|(_, s)| &mut s.coupled).collect();
-    let failures = coupling::step_cables(&mut refs, &mut ctx.rigidbody_set.bodies, &mut ctx.joints.impulse_joints, dt, settings.substeps, &|h| {
-        given.get(&h).copied().unwrap_or_default()
-    });
+    let each: &dyn ForEachCable = if settings.parallel { &OnTaskPool } else { &OneByOne };
+    let failures = coupling::step_cables_with(
+        &mut refs,
+        &mut ctx.rigidbody_set.bodies,
+        &mut ctx.joints.impulse_joints,
+        dt,
+        settings.substeps,
+        &|h| given.get(&h).copied().unwrap_or_default(),
+        each,
+    );
     for (i, t, e) in failures {
         stop(&mut errors, &ropes, CableError::new(list[i].0, CableErrorKind::Diverged, t, e.to_string()));
     }
@@ -373,6 +387,25 @@ pub(crate) fn rapier_step(mode: Option<&TimestepMode>, time: &Time) -> Result<f6
         Some(TimestepMode::Interpolated { .. }) => Err(
             "rapier's `TimestepMode::Interpolated` takes a varying number of rapier steps per frame, which the cables cannot follow: use `TimestepMode::Fixed { dt, .. }` (with the cables in `FixedUpdate`, dt = the fixed timestep) or `TimestepMode::Variable`".into(),
         ),
+    }
+}
+
+/// [`ForEachCable`] on Bevy's compute task pool: one task per cable, when
+/// there are several and the pool exists (else one after the other).
+struct OnTaskPool;
+
+impl ForEachCable for OnTaskPool {
+    fn for_each(&self, cables: &mut [&mut CoupledCable], job: &(dyn Fn(&mut CoupledCable) + Sync)) {
+        match bevy::tasks::ComputeTaskPool::try_get() {
+            Some(pool) if cables.len() > 1 && pool.thread_num() > 1 => {
+                pool.scope(|scope| {
+                    for cc in cables.iter_mut() {
+                        scope.spawn(async move { job(cc) });
+                    }
+                });
+            }
+            _ => OneByOne.for_each(cables, job),
+        }
     }
 }
 
