@@ -145,6 +145,26 @@ pub enum CableSystems {
     WriteBodies,
     /// Refreshes [`CableState`] after rapier's writeback.
     Readout,
+    /// With [`CablePlugin::with_coupled_substeps`]: the system in
+    /// `FixedUpdate` that runs [`CableSubstep`] `n` times.
+    Substeps,
+}
+
+/// The schedule of one coupled sub-step (rapier's systems and the cables'),
+/// run `n` times per fixed step with
+/// [`CablePlugin::with_coupled_substeps`].
+#[derive(ScheduleLabel, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct CableSubstep;
+
+/// Runs [`CableSubstep`] `n` times, rapier's step set to the fixed step / n.
+fn run_coupled_substeps(n: u32) -> impl FnMut(&mut World) {
+    move |world: &mut World| {
+        let dt = world.resource::<Time>().delta_secs() / n as f32;
+        world.insert_resource(bevy_rapier3d::plugin::TimestepMode::Fixed { dt, substeps: 1 });
+        for _ in 0..n {
+            world.run_schedule(CableSubstep);
+        }
+    }
 }
 
 /// The cable plugin. Add it after `RapierPhysicsPlugin`, in the same
@@ -165,8 +185,10 @@ pub struct CablePlugin {
     /// the frame step). The chain is advanced in this many sub-steps of the
     /// rapier step; the exchange with the bodies rapier keeps (explicit
     /// coupling) stays once per step. `cablesim`'s `[simulation] substeps`
-    /// sub-steps rapier as well: in an app, that is a fixed timestep of
-    /// `dt / substeps` (what `plugin::scenario::add_scenario` sets).
+    /// sub-steps rapier as well: that is
+    /// [`CablePlugin::with_coupled_substeps`] (bit-identical to a fixed
+    /// timestep of `dt / substeps`, which `plugin::scenario::add_scenario`
+    /// sets).
     pub substeps: u32,
     /// Step independent cables (islands) at once on Bevy's compute task
     /// pool (default `true`); the results are bit-identical to stepping
@@ -174,11 +196,12 @@ pub struct CablePlugin {
     pub parallel: bool,
     schedule: InternedScheduleLabel,
     default_system_setup: bool,
+    coupled_substeps: Option<u32>,
 }
 
 impl Default for CablePlugin {
     fn default() -> Self {
-        CablePlugin { substeps: 1, parallel: true, schedule: FixedUpdate.intern(), default_system_setup: true }
+        CablePlugin { substeps: 1, parallel: true, schedule: FixedUpdate.intern(), default_system_setup: true, coupled_substeps: None }
     }
 }
 
@@ -186,6 +209,22 @@ impl CablePlugin {
     /// Sets the cable sub-steps per step.
     pub fn with_substeps(mut self, substeps: u32) -> Self {
         self.substeps = substeps;
+        self
+    }
+
+    /// Coupled sub-steps, as `cablesim`'s `[simulation] substeps`: every
+    /// fixed step runs rapier *and* the cables `n` times with `dt / n`
+    /// (`dt` the fixed timestep), the exchange with the bodies rapier keeps
+    /// included each time. Put rapier's systems in [`CableSubstep`]
+    /// (`RapierPhysicsPlugin::in_schedule(CableSubstep)`); the cable
+    /// systems go there too, and the plugin runs that schedule `n` times
+    /// from `FixedUpdate` (after your `FixedUpdate` systems' default place,
+    /// in [`CableSystems::Substeps`]), setting rapier's `TimestepMode` to
+    /// `Fixed { dt: dt / n, substeps: 1 }` before. For stiff explicit
+    /// couplings (a rope on a light jointed boom).
+    pub fn with_coupled_substeps(mut self, n: u32) -> Self {
+        self.coupled_substeps = Some(n.max(1));
+        self.schedule = CableSubstep.intern();
         self
     }
 
@@ -222,6 +261,8 @@ impl CablePlugin {
 
     /// The systems of one set, already in it, for an app that places them
     /// itself ([`CablePlugin::with_default_system_setup`]).
+    /// [`CableSystems::Substeps`] gives an empty system: its runner is
+    /// added by [`CablePlugin::with_coupled_substeps`], which needs `n`.
     pub fn get_systems(set: CableSystems) -> ScheduleConfigs<ScheduleSystem> {
         match set {
             CableSystems::Init => {
@@ -230,6 +271,7 @@ impl CablePlugin {
             CableSystems::Step => systems::step_cables.in_set(CableSystems::Step).into_configs(),
             CableSystems::WriteBodies => systems::write_bodies.in_set(CableSystems::WriteBodies).into_configs(),
             CableSystems::Readout => systems::readout.in_set(CableSystems::Readout).into_configs(),
+            CableSystems::Substeps => (|| {}).in_set(CableSystems::Substeps).into_configs(),
         }
     }
 }
@@ -277,6 +319,10 @@ impl Plugin for CablePlugin {
         for set in [CableSystems::Init, CableSystems::Step, CableSystems::WriteBodies, CableSystems::Readout] {
             app.add_systems(schedule, Self::get_systems(set));
         }
+        if let Some(n) = self.coupled_substeps {
+            app.init_schedule(CableSubstep);
+            app.add_systems(FixedUpdate, run_coupled_substeps(n).in_set(CableSystems::Substeps));
+        }
     }
 
     fn finish(&self, app: &mut App) {
@@ -285,7 +331,7 @@ impl Plugin for CablePlugin {
         // Cables are refused (each with a `CableError`) when they are not.
         if self.default_system_setup && !app.get_schedule(self.schedule).is_some_and(|s| s.graph().system_sets.contains(RapierTransformPropagateSet)) {
             let why = format!(
-                "the cable plugin runs in {:?}, but rapier's systems are not in that schedule: put both in the same one (`RapierPhysicsPlugin::in_fixed_schedule()` with `CablePlugin::default()`, or `in_schedule(S)` on both)",
+                "the cable plugin runs in {:?}, but rapier's systems are not in that schedule: put both in the same one (`RapierPhysicsPlugin::in_fixed_schedule()` with `CablePlugin::default()`, or `in_schedule(S)` on both; with `with_coupled_substeps`, `RapierPhysicsPlugin::in_schedule(CableSubstep)`)",
                 self.schedule
             );
             log::error!("{why}");
