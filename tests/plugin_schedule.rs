@@ -41,6 +41,17 @@ fn spawn_hanging(app: &mut App, extra: impl Bundle) -> (Entity, Entity) {
     (payload, cable)
 }
 
+/// Spawns the hanging payload pushed at 1 m/s along x, runs `frames`
+/// updates without an error, and returns the payload's position and the
+/// cable's nodes and time.
+fn swing(mut app: App, frames: usize) -> (Vec3, Vec<Vec3>, f64) {
+    let (payload, cable) = spawn_hanging(&mut app, Velocity::linear(Vec3::X));
+    let errs = run(&mut app, frames);
+    assert!(errs.is_empty(), "{errs:?}");
+    let state = app.world().get::<CableState>(cable).expect("built and read out").clone();
+    (app.world().get::<Transform>(payload).unwrap().translation, state.nodes, state.time)
+}
+
 fn errors(app: &App) -> Vec<CableError> {
     app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned().collect()
 }
@@ -188,12 +199,7 @@ fn systems_placed_by_hand_run_like_the_default_setup() {
                 app.add_systems(FixedUpdate, CablePlugin::get_systems(set));
             }
         }
-        let mut app = ready(app);
-        let (payload, cable) = spawn_hanging(&mut app, Velocity::linear(Vec3::X));
-        let errs = run(&mut app, 60);
-        assert!(errs.is_empty(), "{errs:?}");
-        let state = app.world().get::<CableState>(cable).expect("readout ran").clone();
-        (app.world().get::<Transform>(payload).unwrap().translation, state.nodes, state.time)
+        swing(ready(app), 60)
     };
     let (a, b) = (hang(false), hang(true));
     println!("default setup: payload {:?} at t = {}; by hand: {:?} at t = {}", a.0, a.2, b.0, b.2);
@@ -208,7 +214,7 @@ fn systems_placed_by_hand_run_like_the_default_setup() {
 /// stepped four times as often (a pushed payload swinging, 1 s).
 #[test]
 fn coupled_substeps_are_the_finer_fixed_step_bit_for_bit() {
-    let swing = |coupled: bool| {
+    let run_with = |coupled: bool| {
         let (rapier, cables, hz, frames) = if coupled {
             (RapierPhysicsPlugin::<NoUserData>::default().in_schedule(CableSubstep), CablePlugin::default().with_coupled_substeps(4), 64.0, 64)
         } else {
@@ -217,18 +223,9 @@ fn coupled_substeps_are_the_finer_fixed_step_bit_for_bit() {
         let mut app = app_with(rapier, cables, TimeUpdateStrategy::FixedTimesteps(1));
         app.insert_resource(Time::<Fixed>::from_hz(hz));
         app.insert_resource(TimestepMode::Fixed { dt: 1.0 / 256.0, substeps: 1 });
-        let mut app = ready(app);
-        let (payload, cable) = spawn_hanging(&mut app, Velocity::linear(Vec3::X));
-        // Build: the coupled app builds in its first fixed step's first
-        // sub-step, the fine app in its first fixed step.
-        let errs = run(&mut app, 1);
-        assert!(errs.is_empty(), "{errs:?}");
-        let errs = run(&mut app, frames);
-        assert!(errs.is_empty(), "{errs:?}");
-        let s = app.world().get::<CableState>(cable).expect("built").clone();
-        (app.world().get::<Transform>(payload).unwrap().translation, s.nodes, s.time)
+        swing(ready(app), frames + 1)
     };
-    let (a, b) = (swing(true), swing(false));
+    let (a, b) = (run_with(true), run_with(false));
     println!("coupled sub-steps: payload {:?} at t = {}; fine fixed step: {:?} at t = {}", a.0, a.2, b.0, b.2);
     assert!(a.0.x > 0.5, "the payload swung: {:?}", a.0);
     assert_eq!(a, b);

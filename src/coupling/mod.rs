@@ -659,7 +659,7 @@ impl Coupling {
         inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
     ) -> Vec<(usize, f64, CableError)> {
         let mut all: Vec<&mut CoupledCable> = self.cables.iter_mut().collect();
-        step_cables(&mut all, bodies, joints, h, substeps, inputs)
+        step_cables(&mut all, bodies, joints, h, substeps, inputs, &OneByOne)
     }
 
     /// Phase 2 over every cable: [`after_rapier`].
@@ -948,26 +948,6 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
     Ok(CoupledCable { cable, roles, parts, carried, followers, fixed_loads, failed: false, advance_failure: None })
 }
 
-/// Phase 1 of a step of length `h`, before rapier steps: samples the
-/// followers (at each cable's own time), reads the carried bodies (`inputs` gives each one's force,
-/// gravity scale and damping), steps every cable that has not failed in
-/// `substeps` equal sub-steps (before its very first step it recomputes
-/// its acceleration with the loads then acting), then hands the carried
-/// bodies to rapier and applies the explicit reactions as impulses.
-/// Returns the cables that failed in this step, with the error and the
-/// time of the failing sub-step; a failed cable keeps its last good
-/// state and is skipped from then on.
-pub fn step_cables(
-    cables: &mut [&mut CoupledCable],
-    bodies: &mut rp::RigidBodySet,
-    joints: &mut rp::ImpulseJointSet,
-    h: f64,
-    substeps: u32,
-    inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
-) -> Vec<(usize, f64, CableError)> {
-    step_cables_with(cables, bodies, joints, h, substeps, inputs, &OneByOne)
-}
-
 /// Runs a job on every cable of a step: one after the other, or at once on
 /// a thread pool (the cables of a step share no data while their own
 /// solves run; the results are bit-identical either way).
@@ -988,9 +968,21 @@ impl ForEachCable for OneByOne {
     }
 }
 
-/// [`step_cables`], with the cables' own solves (the costly part) run by
-/// `each`: the Bevy plugin runs them on Bevy's compute task pool.
-pub fn step_cables_with(
+/// Phase 1 of a step of length `h`, before rapier steps: samples the
+/// followers (at each cable's own time), reads the carried bodies (`inputs` gives each one's force,
+/// gravity scale and damping), steps every cable that has not failed in
+/// `substeps` equal sub-steps (before its very first step it recomputes
+/// its acceleration with the loads then acting), then hands the carried
+/// bodies to rapier and applies the explicit reactions as impulses.
+/// Returns the cables that failed in this step, with the error and the
+/// time of the failing sub-step; a failed cable keeps its last good
+/// state and is skipped from then on.
+///
+/// The cables' own solves (the costly part) are run by `each`: one by one
+/// ([`OneByOne`], `cablesim`) or on a thread pool (the Bevy plugin runs
+/// them on Bevy's compute task pool); the results are the same bits.
+#[allow(clippy::too_many_arguments)]
+pub fn step_cables(
     cables: &mut [&mut CoupledCable],
     bodies: &mut rp::RigidBodySet,
     joints: &mut rp::ImpulseJointSet,

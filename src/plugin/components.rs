@@ -1,7 +1,6 @@
 //! Components and messages of the cable plugin.
 
-#[allow(unused_imports)] // MAX_SEGMENTS: doc links
-use crate::cable::{BodyInChain, RopeMaterial, RopeSection, MAX_SEGMENTS};
+use crate::cable::{BodyInChain, RopeMaterial, RopeSection};
 use crate::coupling::{BodyMotion, CoupledCable};
 use crate::integrate::Scheme;
 use bevy::ecs::entity::{EntityMapper, MapEntities};
@@ -99,7 +98,7 @@ impl MapEntities for CableAnchor {
 pub struct CableDescriptor {
     /// Unstretched length, m.
     pub length: f64,
-    /// Number of beam elements (1 to [`MAX_SEGMENTS`]).
+    /// Number of beam elements (1 to [`MAX_SEGMENTS`](crate::cable::MAX_SEGMENTS)).
     pub segments: usize,
     /// Material and diameter.
     pub material: RopeMaterial,
@@ -250,7 +249,7 @@ impl CableDescriptor {
         }
     }
 
-    /// Sets the number of beam elements (1 to [`MAX_SEGMENTS`]; more is
+    /// Sets the number of beam elements (1 to [`MAX_SEGMENTS`](crate::cable::MAX_SEGMENTS); more is
     /// stiffer bending detail and cost linear in the number).
     pub fn segments(mut self, segments: usize) -> Self {
         self.segments = segments;

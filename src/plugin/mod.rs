@@ -145,10 +145,13 @@ pub enum CableSystems {
     WriteBodies,
     /// Refreshes [`CableState`] after rapier's writeback.
     Readout,
-    /// With [`CablePlugin::with_coupled_substeps`]: the system in
-    /// `FixedUpdate` that runs [`CableSubstep`] `n` times.
-    Substeps,
 }
+
+/// With [`CablePlugin::with_coupled_substeps`]: the set in `FixedUpdate`
+/// of the system that runs [`CableSubstep`] `n` times (order your
+/// `FixedUpdate` systems before or after it).
+#[derive(SystemSet, Debug, Hash, PartialEq, Eq, Clone, Copy)]
+pub struct CableSubsteps;
 
 /// The schedule of one coupled sub-step (rapier's systems and the cables'),
 /// run `n` times per fixed step with
@@ -218,14 +221,24 @@ impl CablePlugin {
     /// included each time. Put rapier's systems in [`CableSubstep`]
     /// (`RapierPhysicsPlugin::in_schedule(CableSubstep)`); the cable
     /// systems go there too, and the plugin runs that schedule `n` times
-    /// from `FixedUpdate` (after your `FixedUpdate` systems' default place,
-    /// in [`CableSystems::Substeps`]), setting rapier's `TimestepMode` to
-    /// `Fixed { dt: dt / n, substeps: 1 }` before. For stiff explicit
-    /// couplings (a rope on a light jointed boom).
+    /// from `FixedUpdate` (in [`CableSubsteps`], also with
+    /// [`CablePlugin::with_default_system_setup`]`(false)`), setting
+    /// rapier's `TimestepMode` to `Fixed { dt: dt / n, substeps: 1 }`
+    /// before. It takes precedence over [`CablePlugin::in_schedule`]. For
+    /// stiff explicit couplings (a rope on a light jointed boom).
     pub fn with_coupled_substeps(mut self, n: u32) -> Self {
         self.coupled_substeps = Some(n.max(1));
-        self.schedule = CableSubstep.intern();
         self
+    }
+
+    /// The schedule of the cable systems: [`CableSubstep`] with coupled
+    /// sub-steps, else the one chosen ([`CablePlugin::in_schedule`]).
+    fn schedule(&self) -> InternedScheduleLabel {
+        if self.coupled_substeps.is_some() {
+            CableSubstep.intern()
+        } else {
+            self.schedule
+        }
     }
 
     /// Steps independent cables on Bevy's compute task pool (`true`, the
@@ -261,8 +274,6 @@ impl CablePlugin {
 
     /// The systems of one set, already in it, for an app that places them
     /// itself ([`CablePlugin::with_default_system_setup`]).
-    /// [`CableSystems::Substeps`] gives an empty system: its runner is
-    /// added by [`CablePlugin::with_coupled_substeps`], which needs `n`.
     pub fn get_systems(set: CableSystems) -> ScheduleConfigs<ScheduleSystem> {
         match set {
             CableSystems::Init => {
@@ -271,7 +282,6 @@ impl CablePlugin {
             CableSystems::Step => systems::step_cables.in_set(CableSystems::Step).into_configs(),
             CableSystems::WriteBodies => systems::write_bodies.in_set(CableSystems::WriteBodies).into_configs(),
             CableSystems::Readout => systems::readout.in_set(CableSystems::Readout).into_configs(),
-            CableSystems::Substeps => (|| {}).in_set(CableSystems::Substeps).into_configs(),
         }
     }
 }
@@ -309,19 +319,19 @@ impl Plugin for CablePlugin {
         app.add_message::<CableError>();
         app.init_resource::<systems::Legs>();
         app.add_observer(systems::release_cable);
+        if let Some(n) = self.coupled_substeps {
+            app.init_schedule(CableSubstep);
+            app.add_systems(FixedUpdate, run_coupled_substeps(n).in_set(CableSubsteps));
+        }
         if !self.default_system_setup {
             return;
         }
-        let schedule = self.schedule;
+        let schedule = self.schedule();
         app.configure_sets(schedule, (CableSystems::Init, CableSystems::Step).chain().after(PhysicsSet::SyncBackend).before(PhysicsSet::StepSimulation));
         app.configure_sets(schedule, CableSystems::WriteBodies.after(PhysicsSet::StepSimulation).before(PhysicsSet::Writeback));
         app.configure_sets(schedule, CableSystems::Readout.after(PhysicsSet::Writeback));
         for set in [CableSystems::Init, CableSystems::Step, CableSystems::WriteBodies, CableSystems::Readout] {
             app.add_systems(schedule, Self::get_systems(set));
-        }
-        if let Some(n) = self.coupled_substeps {
-            app.init_schedule(CableSubstep);
-            app.add_systems(FixedUpdate, run_coupled_substeps(n).in_set(CableSystems::Substeps));
         }
     }
 
@@ -329,10 +339,11 @@ impl Plugin for CablePlugin {
         // Rapier's default setup puts its transform propagation set in its
         // schedule; the cables' order is only meaningful beside it.
         // Cables are refused (each with a `CableError`) when they are not.
-        if self.default_system_setup && !app.get_schedule(self.schedule).is_some_and(|s| s.graph().system_sets.contains(RapierTransformPropagateSet)) {
+        let schedule = self.schedule();
+        if self.default_system_setup && !app.get_schedule(schedule).is_some_and(|s| s.graph().system_sets.contains(RapierTransformPropagateSet)) {
             let why = format!(
                 "the cable plugin runs in {:?}, but rapier's systems are not in that schedule: put both in the same one (`RapierPhysicsPlugin::in_fixed_schedule()` with `CablePlugin::default()`, or `in_schedule(S)` on both; with `with_coupled_substeps`, `RapierPhysicsPlugin::in_schedule(CableSubstep)`)",
-                self.schedule
+                schedule
             );
             log::error!("{why}");
             app.insert_resource(systems::Misplaced(why));

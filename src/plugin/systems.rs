@@ -51,10 +51,7 @@ pub(crate) fn init_cables(
     }
     // What no cable of the batch can be built with: a timestep the cables
     // cannot follow, or not exactly one default rapier context.
-    let interpolated = match (settings.step, mode.as_deref()) {
-        (None, Some(m @ TimestepMode::Interpolated { .. })) => rapier_step(Some(m), &Time::default()).err(),
-        _ => None,
-    };
+    let interpolated = (settings.step.is_none() && matches!(mode.as_deref(), Some(TimestepMode::Interpolated { .. }))).then(|| INTERPOLATED.to_string());
     let default_context = contexts.0.single().ok();
     let refused = misplaced.map(|m| m.0.clone()).or(interpolated).or_else(|| {
         default_context.is_none().then(|| {
@@ -361,7 +358,7 @@ pub(crate) fn step_cables(
     }
     let mut refs: Vec<&mut CoupledCable> = list.iter_mut().map(|(_, s)| &mut s.coupled).collect();
     let each: &dyn ForEachCable = if settings.parallel { &OnTaskPool } else { &OneByOne };
-    let failures = coupling::step_cables_with(
+    let failures = coupling::step_cables(
         &mut refs,
         &mut ctx.rigidbody_set.bodies,
         &mut ctx.joints.impulse_joints,
@@ -375,6 +372,9 @@ pub(crate) fn step_cables(
     }
 }
 
+/// Why the cables refuse rapier's `TimestepMode::Interpolated`.
+const INTERPOLATED: &str = "rapier's `TimestepMode::Interpolated` takes a varying number of rapier steps per frame, which the cables cannot follow: use `TimestepMode::Fixed { dt, .. }` (with the cables in `FixedUpdate`, dt = the fixed timestep) or `TimestepMode::Variable`";
+
 /// The time rapier advances in one run of its step system, s, as
 /// bevy_rapier's `step_simulation` computes it from `TimestepMode` (in
 /// f32, as rapier does), or why the cables cannot follow it. Without the
@@ -384,9 +384,7 @@ pub(crate) fn rapier_step(mode: Option<&TimestepMode>, time: &Time) -> Result<f6
         None => Ok(time.delta_secs_f64()),
         Some(TimestepMode::Fixed { dt, .. }) => Ok(*dt as f64),
         Some(TimestepMode::Variable { max_dt, time_scale, .. }) => Ok((time.delta_secs() * time_scale).min(*max_dt) as f64),
-        Some(TimestepMode::Interpolated { .. }) => Err(
-            "rapier's `TimestepMode::Interpolated` takes a varying number of rapier steps per frame, which the cables cannot follow: use `TimestepMode::Fixed { dt, .. }` (with the cables in `FixedUpdate`, dt = the fixed timestep) or `TimestepMode::Variable`".into(),
-        ),
+        Some(TimestepMode::Interpolated { .. }) => Err(INTERPOLATED.into()),
     }
 }
 
@@ -412,12 +410,14 @@ impl ForEachCable for OnTaskPool {
 /// Why the inputs of carried body `body` cannot enter the cable solve (a
 /// non-finite value, named), or `None`.
 fn invalid_input(body: Entity, input: &BodyInputs, velocity: Option<(Vec3, Vec3)>) -> Option<String> {
-    let named = [
-        ("ExternalForce::force (N)", input.force.is_finite(), format!("{}", input.force)),
-        ("ExternalForce::torque (N·m)", input.torque.is_finite(), format!("{}", input.torque)),
-        ("GravityScale", input.gravity_scale.is_finite(), format!("{}", input.gravity_scale)),
-        ("Damping::linear_damping (1/s)", input.linear_damping.is_finite(), format!("{}", input.linear_damping)),
-        ("Damping::angular_damping (1/s)", input.angular_damping.is_finite(), format!("{}", input.angular_damping)),
+    // Checked every step for every carried body: the values are formatted
+    // only for the message.
+    let named: [(&str, bool, &dyn std::fmt::Display); 5] = [
+        ("ExternalForce::force (N)", input.force.is_finite(), &input.force),
+        ("ExternalForce::torque (N·m)", input.torque.is_finite(), &input.torque),
+        ("GravityScale", input.gravity_scale.is_finite(), &input.gravity_scale),
+        ("Damping::linear_damping (1/s)", input.linear_damping.is_finite(), &input.linear_damping),
+        ("Damping::angular_damping (1/s)", input.angular_damping.is_finite(), &input.angular_damping),
     ];
     if let Some((what, _, value)) = named.iter().find(|(_, ok, _)| !ok) {
         return Some(format!("carried body {body}: its {what} is not finite ({value})"));
