@@ -95,6 +95,8 @@ struct Run {
     energy_rise: f64,
     newton: f64,
     substeps: f64,
+    /// Axial force of the top element at the end, N.
+    pin_tension: f64,
 }
 
 fn run(segments: usize, tau: f64, h: f64, t_end: f64) -> Result<Run, String> {
@@ -115,7 +117,8 @@ fn run(segments: usize, tau: f64, h: f64, t_end: f64) -> Result<Run, String> {
     }
     let s = cable.total_stats;
     let steps = cable.steps as f64;
-    Ok(Run { peak, rebound, least, energy_rise: rise, newton: s.newton_iterations as f64 / steps, substeps: s.substeps_used as f64 / steps })
+    let pin_tension = cable.element_forces(0).expect("element 0").tension;
+    Ok(Run { peak, rebound, least, energy_rise: rise, newton: s.newton_iterations as f64 / steps, substeps: s.substeps_used as f64 / steps, pin_tension })
 }
 
 /// At a fine step (h = 0.5 ms) the peak force and the rebound speed match
@@ -142,18 +145,53 @@ fn damped_drop_at_a_fine_step_rebounds_like_a_kelvin_voigt_rope() {
     assert!(fine.energy_rise < 1e-6 * M * G * L, "energy rose by {} J", fine.energy_rise);
 }
 
-/// The same drop at the frame step (1/60 s, N = 40, τ = 0.01) is not
-/// solved yet: it must stop with an error that names the time, keep the
-/// state of the last good step, and have run the free fall and the snap
-/// before (the failure comes as the block rebounds; with τ = 0.002 it
-/// comes earlier, at 0.67 s in the free fall, where the clamped law's
-/// damper pulls on the opening slack elements). If this starts
-/// passing without an error, the case is solved: turn it into a check
-/// against the closed form and update docs/architecture.md.
+/// The same drop at the frame step (1/60 s, N = 40), τ = 0.002 and 0.01:
+/// it runs through the free fall, the snap and the rebounds (each rebound
+/// unloads the rope faster than its damper) and comes to rest (by 10 s) on the
+/// static tension. Reference: the same model at h = 0.5 ms (checked
+/// against the Kelvin–Voigt closed form above). The frame step spans the
+/// 50 ms snap with three steps, so the peak force and the rebound come out
+/// low (as the undamped slack drop's peak in `tests/slack.rs`); they are
+/// bounded here, not matched. No energy is gained: the largest rise above
+/// the start stays below 1 % of the drop energy `M g (L − DROP)`.
 #[test]
-fn damped_drop_at_the_frame_step_fails_loudly_as_the_block_rebounds() {
+fn damped_drop_runs_at_the_frame_step_and_comes_to_rest() {
     let h = 1.0 / 60.0;
-    let mut cable = drop_on(40, 0.01);
+    for tau in [0.002, 0.01] {
+        let fine = run(40, tau, 5e-4, 1.2).expect("fine step");
+        let frame = run(40, tau, h, 10.0).unwrap_or_else(|e| panic!("frame step: {e}"));
+        let (e_peak, e_reb) = (frame.peak / fine.peak - 1.0, frame.rebound / fine.rebound - 1.0);
+        // At rest after 10 s: the pin carries the block and the rope.
+        let rest = frame.pin_tension / ((M + steel20().linear_density * L) * G) - 1.0;
+        let drop_energy = M * G * (L - DROP);
+        println!(
+            "τ = {tau}, h = 1/60 s: peak {:.4e} N ({e_peak:+.2e} from h = 0.5 ms), rebound {:.3} m/s ({e_reb:+.2e}), energy rise {:.1e} of M g (L − drop), pin tension at 10 s {rest:+.1e} from (M + rope) g; {:.2} Newton it/step, {:.2} sub-steps/step",
+            frame.peak,
+            frame.rebound,
+            frame.energy_rise / drop_energy,
+            frame.newton,
+            frame.substeps
+        );
+        assert!(e_peak < 0.0 && e_peak > -0.25, "peak {e_peak:+.3} from the fine step");
+        assert!(e_reb < 0.0 && e_reb > -0.25, "rebound {e_reb:+.3} from the fine step");
+        assert!(frame.energy_rise < 0.01 * drop_energy, "energy rose by {} J", frame.energy_rise);
+        assert!(rest.abs() < 1e-3, "not at rest on the static tension: {rest:+.2e}");
+        assert!(frame.substeps < 4.0, "{} sub-steps per step", frame.substeps);
+    }
+}
+
+/// Heavier damping (τ = 0.02, N = 40) at the frame step is not solved yet
+/// (docs/architecture.md, "What does not work yet"): as the rope unloads
+/// right after the snap, every element sits within micrometres of its
+/// kink (`u + τ u̇ ≈ 0`: spring and damper cancel), and the branch updates
+/// move it one element per update. It must stop with an error that names
+/// the time, keep the state of the last good step, and have run the free
+/// fall before. If this starts passing without an error, the case is
+/// solved: move it into the test above and update docs/architecture.md.
+#[test]
+fn heavily_damped_drop_at_the_frame_step_fails_loudly_as_the_rope_unloads() {
+    let h = 1.0 / 60.0;
+    let mut cable = drop_on(40, 0.02);
     let mut failure = None;
     while cable.time() < 4.0 - 1e-9 {
         let t = cable.time();
@@ -162,11 +200,11 @@ fn damped_drop_at_the_frame_step_fails_loudly_as_the_block_rebounds() {
             break;
         }
     }
-    let (t, message) = failure.expect("the damped drop now runs at the frame step: update the test and docs/architecture.md");
-    println!("frame step: {message}");
+    let (t, message) = failure.expect("the τ = 0.02 drop now runs at the frame step: update the test and docs/architecture.md");
+    println!("frame step, τ = 0.02: {message}");
     assert!(message.contains("did not converge") && message.contains(&format!("t = {t}")), "{message}");
     assert_eq!(cable.time(), t, "a failed step moved the time");
     assert!(cable.state.is_finite());
-    // The snap (about 0.78 s after release) was stepped before the failure.
+    // The snap (about 0.78 s after release) was reached before the failure.
     assert!(t > (2.0 * (L - DROP) / G).sqrt(), "failed before the rope went taut, at t = {t}");
 }

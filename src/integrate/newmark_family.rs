@@ -52,7 +52,7 @@ pub(crate) fn step_alpha<S: SecondOrderSystem + ?Sized>(
         ws.x[i] = a0 + ratio * (a0 - ws.a_prev[i]);
     }
     let map = Affine { t: state.t + h, c_q: h2 * beta * s, c_v: h * gamma * s, h };
-    newton::solve(sys, ws, map, settings, false, stats, &state.q)?;
+    newton::solve(sys, ws, map, settings, false, stats, (&state.q, &state.v))?;
     for i in 0..n {
         let ah_base = (alpha_f * state.a[i] - alpha_m * state.a_hat[i]) * d;
         state.a_hat[i] = s * ws.x[i] + ah_base;
@@ -121,7 +121,7 @@ pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
     if stiff {
         linearised_at_start(sys, state, ws, map, stats)?;
     } else {
-        newton::solve(sys, ws, map, settings, true, stats, &state.q)?;
+        newton::solve(sys, ws, map, settings, true, stats, (&state.q, &state.v))?;
     }
     state.q.copy_from_slice(&ws.q);
     state.v.copy_from_slice(&ws.v);
@@ -153,7 +153,7 @@ fn linearised_at_start<S: SecondOrderSystem + ?Sized>(
     }
     // Non-smooth laws on the branch of the predicted configuration, as the
     // one-correction form has them.
-    sys.freeze_branches(&state.q, &ws.q);
+    sys.freeze_branches((&state.q, &state.v), (&ws.q, &ws.v));
     for i in 0..n {
         ws.q[i] = state.q[i] + eps * ws.dq_sum[i];
     }

@@ -83,9 +83,10 @@ pub(crate) struct Affine {
 ///
 /// Non-smooth laws (tension-only rope elements) are solved by an active
 /// set: Newton runs on the branches frozen from the step's start `start`
-/// and the starting iterate ([`SecondOrderSystem::freeze_branches`]); once
-/// it converges, every law whose branch disagrees with the solution changes
-/// branch and Newton goes on, with a fresh iteration budget, up to
+/// (coordinates, velocities) and the starting iterate
+/// ([`SecondOrderSystem::freeze_branches`]); once it converges, every law
+/// whose branch disagrees with the solution changes branch (a taut one only
+/// beyond [`KINK_BAND`]) and Newton goes on, with a fresh iteration budget, up to
 /// [`MAX_BRANCH_UPDATES`] times. A solution whose branches then still
 /// disagree by more than [`KINK_BAND`] is not accepted: the step fails as
 /// not converged (and the fallback splits it).
@@ -96,10 +97,10 @@ pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
     settings: &NewtonSettings,
     one_shot: bool,
     stats: &mut StepStats,
-    start: &[f64],
+    start: (&[f64], &[f64]),
 ) -> Result<(), Failure> {
     update_coordinates(ws, map.c_q, map.c_v);
-    sys.freeze_branches(start, &ws.q);
+    sys.freeze_branches(start, (&ws.q, &ws.v));
     let mut result = iterate(sys, ws, map, settings, one_shot, stats);
     if !one_shot {
         // Branch updates until the branches agree with the solution. After

@@ -97,15 +97,18 @@ pub trait SecondOrderSystem {
 
     /// Non-smooth laws (a slack rope's tension-only elements; contact
     /// next): freeze each law on a branch (taut or slack) chosen from the
-    /// coordinates at the start of the step, `start`, and the predicted
-    /// ones, `predicted`, so that Newton solves a smooth system. Called by
+    /// coordinates and velocities `(q, v)` at the start of the step,
+    /// `start`, and the predicted ones, `predicted`, so that Newton solves
+    /// a smooth system. Called by
     /// the implicit schemes at the start of each Newton solve. Default:
     /// nothing to freeze.
-    fn freeze_branches(&mut self, _start: &[f64], _predicted: &[f64]) {}
+    fn freeze_branches(&mut self, _start: (&[f64], &[f64]), _predicted: (&[f64], &[f64])) {}
 
     /// After Newton converged on the frozen branches: moves every law whose
-    /// branch disagrees with `(q, v)` (beyond the position tolerance) to
-    /// the other branch and returns how many moved (0: the converged point
+    /// branch disagrees with `(q, v)` to the other branch (a slack law that
+    /// pulls by more than the position tolerance; a taut law that pushes
+    /// by more than [`KINK_BAND`](crate::integrate::KINK_BAND), within
+    /// which it is accepted taut) and returns how many moved (0: the converged point
     /// solves the exact, non-smooth equations). Default 0.
     fn update_branches(&mut self, _q: &[f64], _v: &[f64]) -> usize {
         0

@@ -36,7 +36,7 @@ pub(crate) fn step_wilson<S: SecondOrderSystem + ?Sized>(
         ws.x[i] = a0;
     }
     let map = Affine { t: state.t + tau, c_q: tau * tau / 6.0, c_v: 0.5 * tau, h };
-    newton::solve(sys, ws, map, settings, false, stats, &state.q)?;
+    newton::solve(sys, ws, map, settings, false, stats, (&state.q, &state.v))?;
     for i in 0..state.dof() {
         let a0 = state.a[i];
         let a1 = a0 + (ws.x[i] - a0) / theta;

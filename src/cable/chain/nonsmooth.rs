@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::cable::spatial::V6;
-use crate::integrate::{SecondOrderSystem, SystemError};
+use crate::integrate::{SecondOrderSystem, SystemError, KINK_BAND};
 use glam::{DMat3, DQuat, DVec3};
 
 /// Slack (m) within which a tension-only element starts a Newton solve on
@@ -41,7 +41,7 @@ impl SecondOrderSystem for Chain {
     fn position_tolerance(&self) -> f64 {
         self.position_tolerance
     }
-    fn freeze_branches(&mut self, start: &[f64], predicted: &[f64]) {
+    fn freeze_branches(&mut self, start: (&[f64], &[f64]), predicted: (&[f64], &[f64])) {
         // An invalid description freezes nothing: the next evaluation
         // reports it.
         if self.assign_slots().is_err() || self.nonsmooth.is_empty() {
@@ -49,7 +49,9 @@ impl SecondOrderSystem for Chain {
         }
         self.branch.resize(self.joints.len(), 1);
         // Taut unless both the step's start and the predictor are slack by
-        // more than `TAUT_BAND` (or the position tolerance): an
+        // more than `TAUT_BAND` (or the position tolerance), in the law's
+        // own measure `u + τ u̇` (a damped element unloading faster than its
+        // damper is slack while still stretched): an
         // element at its kink (unstrained, or laid from rounded coordinates)
         // is taken taut, and the predictor's round-off (its acceleration on
         // a light element between heavy ones) cannot start it slack. A
@@ -59,8 +61,8 @@ impl SecondOrderSystem for Chain {
         let band = self.position_tolerance.max(TAUT_BAND);
         for &s in &self.nonsmooth {
             let s = s as usize;
-            let rest = self.joints[s].rest;
-            self.branch[s] = u8::from(start[s] - rest >= -band || predicted[s] - rest >= -band);
+            let j = &self.joints[s];
+            self.branch[s] = u8::from(j.taut_measure(start.0[s], start.1[s]) >= -band || j.taut_measure(predicted.0[s], predicted.1[s]) >= -band);
         }
         self.frozen = true;
     }
@@ -68,11 +70,18 @@ impl SecondOrderSystem for Chain {
         if !self.frozen {
             return 0;
         }
+        // A slack law that pulls moves to taut at once; a taut law moves to
+        // slack only once it pushes beyond the kink band (`KINK_BAND`).
+        // Within the band it is accepted taut anyway, and moving it would
+        // send the change down a rope near zero tension (its own weight
+        // only) one element per update.
         let tol = self.position_tolerance;
+        let band = tol.max(KINK_BAND);
         let mut moved = 0;
         for i in 0..self.nonsmooth.len() {
             let s = self.nonsmooth[i] as usize;
-            if self.disagreement(s, q, v) > tol {
+            let limit = if self.branch[s] != 0 { band } else { tol };
+            if self.disagreement(s, q, v) > limit {
                 self.branch[s] ^= 1;
                 moved += 1;
             }
