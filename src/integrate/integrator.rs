@@ -6,7 +6,7 @@ use std::ops::AddAssign;
 use super::error::IntegrateError;
 use super::explicit;
 use super::newmark_family::{step_alpha, step_linearly_implicit};
-use super::newton::{Failure, NewtonSettings};
+use super::newton::{Failure, NewtonSettings, LAST_RESORT_BRANCH_UPDATES, MAX_BRANCH_UPDATES};
 use super::scheme::Scheme;
 use super::state::State;
 use super::system::SecondOrderSystem;
@@ -90,6 +90,9 @@ pub(crate) struct Workspace {
     pub a_prev: Vec<f64>,
     pub a_prev_h: f64,
     pub a_prev_next_t: f64,
+    /// Branch updates a Newton solve may make (`MAX_BRANCH_UPDATES`, or
+    /// more in the last-resort pass).
+    pub branch_budget: usize,
     backup: [Vec<f64>; 4],
     backup_t: f64,
 }
@@ -305,6 +308,8 @@ impl Integrator {
         // slack rope's first whip needs fine steps for a while; retrying the
         // full step every frame would cost a failed solve each time).
         let mut n = if auto { self.split.clamp(n0, max_n) } else { n0 };
+        let start_n = n;
+        self.ws.branch_budget = MAX_BRANCH_UPDATES;
         loop {
             let before = stats.newton_iterations;
             match self.try_substeps(sys, state, h, n, stats) {
@@ -324,6 +329,15 @@ impl Integrator {
                 Err(failure) => {
                     self.ws.restore(state);
                     let next = n.saturating_mul(2);
+                    // Every split failed to converge: the last-resort pass,
+                    // once, from the first split with a larger
+                    // branch-update budget.
+                    let not_converged = matches!(failure, Failure::NotConverged { .. });
+                    if (next > max_n || next == n) && not_converged && self.ws.branch_budget == MAX_BRANCH_UPDATES {
+                        self.ws.branch_budget = LAST_RESORT_BRANCH_UPDATES;
+                        n = start_n;
+                        continue;
+                    }
                     if next > max_n || next == n {
                         return Err(match failure {
                             Failure::NotConverged { iterations } => IntegrateError::NotConverged { t, h, substeps: n, iterations },

@@ -87,7 +87,8 @@ pub(crate) struct Affine {
 /// ([`SecondOrderSystem::freeze_branches`]); once it converges, every law
 /// whose branch disagrees with the solution changes branch (a taut one only
 /// beyond [`KINK_BAND`]) and Newton goes on, with a fresh iteration budget, up to
-/// [`MAX_BRANCH_UPDATES`] times. A solution whose branches then still
+/// [`MAX_BRANCH_UPDATES`] times ([`LAST_RESORT_BRANCH_UPDATES`] in the
+/// integrator's last-resort pass, `ws.branch_budget`). A solution whose branches then still
 /// disagree by more than [`KINK_BAND`] is not accepted: the step fails as
 /// not converged (and the fallback splits it).
 pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
@@ -111,7 +112,7 @@ pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
         // the step is split.
         let mut updates = 0;
         while result.is_ok() {
-            if updates == MAX_BRANCH_UPDATES {
+            if updates == ws.branch_budget.max(MAX_BRANCH_UPDATES) {
                 if sys.branch_disagreement(&ws.q, &ws.v) > KINK_BAND {
                     result = Err(Failure::NotConverged { iterations: settings.max_iterations.max(1) });
                 }
@@ -131,6 +132,15 @@ pub(crate) fn solve<S: SecondOrderSystem + ?Sized>(
 
 /// Most branch updates of non-smooth laws in one Newton solve.
 pub const MAX_BRANCH_UPDATES: usize = 3;
+
+/// Most branch updates of one Newton solve in the integrator's last-resort
+/// pass: when a step fails at every split up to
+/// [`NewtonSettings::max_substeps`] with [`MAX_BRANCH_UPDATES`], it is
+/// tried again from its first split with this many. A rope whose change of
+/// branch walks down it one element per update (a damped rope unloading
+/// while it carries only its own weight) needs about one update per
+/// element. Steps that pass the first pass never see it.
+pub const LAST_RESORT_BRANCH_UPDATES: usize = 64;
 
 /// Largest disagreement (m or rad, the law's own measure: a tension-only
 /// element's `x + (c/k) v`) between a law's frozen branch and the solution
