@@ -111,13 +111,14 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 15] = [
+const COMPARED: [&str; 16] = [
     "axial_bounce",
     "bend_45",
     "boom_hoist",
     "cantilever_end_moment",
     "cantilever_tip_load",
     "catenary",
+    "damped_drop",
     "hanging_chain",
     "hanging_payload",
     "pendulum_60deg",
@@ -153,6 +154,7 @@ same_rows!(
     cantilever_end_moment,
     cantilever_tip_load,
     catenary,
+    damped_drop,
     hanging_chain,
     hanging_payload,
     pendulum_60deg,
