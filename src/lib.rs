@@ -14,7 +14,7 @@
 //!
 //! | module | feature | knows | what |
 //! |---|---|---|---|
-//! | `plugin` | `app` | Bevy, bevy_rapier3d | the Bevy plugin: cables as entities; `plugin::scenario` (also `sim`) spawns a scenario file into an app |
+//! | `plugin` | `app` | Bevy, bevy_rapier3d | the Bevy plugin: cables as entities; `plugin::scenario` (also `sim`) spawns a scenario file into an app; `plugin::render` (`render`) draws them |
 //! | `output` | `cli` | csv, serde_json, plotters | results.csv, summary.json, plot.png of `cablesim` |
 //! | `sim` | `sim` | rapier3d | the Bevy-free scenario runner (`sim::World`, probes); with `rapier` alone, only the static-solve settings the plugin shares |
 //! | `coupling` | `rapier` | rapier3d | the coupling core: cables stepped beside rapier's sets, shared by `sim` and `plugin` |
@@ -32,9 +32,12 @@
 //! | `sim` | `scenario` + `rapier` + `sim` | — |
 //! | `app` | `rapier` + `plugin` (and `plugin::scenario` with `sim`) | bevy, bevy_rapier3d, log |
 //! | `cli` | `app` + `sim` + `output` and the `cablesim` binary | clap, indicatif, csv, serde_json, plotters |
+//! | `render` | `app` + `plugin::render`: ropes drawn as lit tube meshes interpolated between fixed steps, node gizmos (an app with its own window and renderer) | Bevy's `bevy_asset`, `bevy_mesh`, `bevy_pbr`, `bevy_gizmos` (and the render crates they need) |
+//! | `demo` | `render` + a windowed Bevy for the examples (`hanging_payload`): winit on X11 only (no Wayland, audio or gamepads, so no system dev packages are needed to build), 3D and UI rendering, PNG screenshots | Bevy's `default_app`, `bevy_winit`, `x11`, `3d_bevy_render`, `ui_api`, ... |
 //!
 //! The default features are `app` and `cli`, so that `cargo run --release --
-//! run file.toml` and `cargo test --release` work as they are. A game needs
+//! run file.toml` and `cargo test --release` work as they are, headless: the
+//! default build compiles no renderer. A game needs
 //! only the plugin, without any command-line crate:
 //!
 //! ```toml

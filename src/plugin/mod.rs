@@ -2,7 +2,9 @@
 //! schedule (`FixedUpdate` by default; [`CablePlugin::in_schedule`]),
 //! coupled both ways with rapier bodies. A complete app and the topics of
 //! embedding (schedules, reading cables, despawning, rendering) are in
-//! `docs/embedding.md`.
+//! `docs/embedding.md`. With the feature `render`, `plugin::render` draws every
+//! cable as a tube mesh, interpolated between fixed steps
+//! (`render::CableRenderPlugin`).
 //!
 //! ```no_run
 //! use bevy::prelude::*;
@@ -118,6 +120,8 @@
 //! Tested in `tests/plugin_lifecycle.rs`.
 
 mod components;
+#[cfg(feature = "render")]
+pub mod render;
 #[cfg(feature = "sim")]
 pub mod scenario;
 mod systems;
