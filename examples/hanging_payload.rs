@@ -274,14 +274,14 @@ fn setup_scene(mut commands: Commands) {
         Transform::from_xyz(8.0, 20.0, 10.0).looking_at(Vec3::ZERO, Vec3::Y),
         CascadeShadowConfigBuilder { maximum_distance: 60.0, first_cascade_far_bound: 18.0, ..default() }.build(),
     ));
-    let orbit = Orbit { focus: Vec3::new(0.0, 5.6, 0.0), yaw: 0.6, pitch: -0.16, distance: 19.0 };
+    let orbit = Orbit { focus: Vec3::new(0.0, 6.0, 0.0), yaw: 0.6, pitch: -0.14, distance: 19.0 };
     commands.spawn((Camera3d::default(), orbit_transform(&orbit), orbit));
     let font = TextFont { font_size: FontSize::Px(17.0), ..default() };
     commands
         .spawn((
             Node {
                 position_type: PositionType::Absolute,
-                top: px(10),
+                bottom: px(10),
                 left: px(10),
                 padding: UiRect::all(px(8)),
                 flex_direction: FlexDirection::Column,
