@@ -393,6 +393,9 @@ fn radius_of(render: &CableRender, descriptor: Option<&CableDescriptor>) -> f32 
 
 type TubeQuery<'a> = (Entity, &'a CableRender, &'a CableRenderNodes, Option<&'a CableDescriptor>, Option<&'a mut CableTube>);
 
+/// Cables whose drawing changed this frame.
+type Redrawn = (With<CableState>, Or<(Changed<CableRenderNodes>, Changed<CableRender>)>);
+
 /// Creates a tube for a drawn cable without one, or a new one when the node
 /// count or the number of sides changed.
 fn build_tubes(
@@ -425,7 +428,7 @@ fn build_tubes(
 }
 
 /// Rewrites the tubes' positions, normals and colours in place.
-fn update_tubes(meshes: Option<ResMut<Assets<Mesh>>>, mut cables: Query<TubeQuery, (With<CableState>, Or<(Changed<CableRenderNodes>, Changed<CableRender>)>)>) {
+fn update_tubes(meshes: Option<ResMut<Assets<Mesh>>>, mut cables: Query<TubeQuery, Redrawn>) {
     let Some(mut meshes) = meshes else { return };
     for (_, render, nodes, descriptor, tube) in &mut cables {
         let Some(mut tube) = tube else { continue };
