@@ -1,6 +1,7 @@
 //! Every example runs headless for a few frames (they are built by
 //! `cargo test`; this runs the binaries). The demos (feature `demo`:
-//! `cargo test --release --features demo --test examples_headless`) run
+//! `cargo test --profile ci-demo --features demo --test examples_headless`,
+//! as CI does, or `--release`) run
 //! with `--headless N`: no window and no renderer.
 
 use std::path::PathBuf;
@@ -21,8 +22,12 @@ fn example(name: &str) -> PathBuf {
         if cfg!(feature = "demo") {
             cmd.args(["--features", "demo"]);
         }
-        if profile_dir.file_name().is_some_and(|p| p == "release") {
-            cmd.arg("--release");
+        // The profile this test was built with (its folder: `debug` is `dev`).
+        match profile_dir.file_name().and_then(|p| p.to_str()) {
+            Some("debug") | None => {}
+            Some(profile) => {
+                cmd.args(["--profile", profile]);
+            }
         }
         assert!(cmd.status().unwrap().success(), "could not build example {name}");
     }
