@@ -329,16 +329,17 @@ impl Integrator {
                 Err(failure) => {
                     self.ws.restore(state);
                     let next = n.saturating_mul(2);
+                    let exhausted = next > max_n || next == n;
                     // Every split failed to converge: the last-resort pass,
                     // once, from the first split with a larger
                     // branch-update budget.
                     let not_converged = matches!(failure, Failure::NotConverged { .. });
-                    if (next > max_n || next == n) && not_converged && self.ws.branch_budget == MAX_BRANCH_UPDATES {
+                    if exhausted && not_converged && self.ws.branch_budget == MAX_BRANCH_UPDATES {
                         self.ws.branch_budget = LAST_RESORT_BRANCH_UPDATES;
                         n = start_n;
                         continue;
                     }
-                    if next > max_n || next == n {
+                    if exhausted {
                         return Err(match failure {
                             Failure::NotConverged { iterations } => IntegrateError::NotConverged { t, h, substeps: n, iterations },
                             Failure::Error(e) => e,
