@@ -20,13 +20,14 @@
 //! | `coupling` | `rapier` | rapier3d | the coupling core: cables stepped beside rapier's sets, shared by `sim` and `plugin` |
 //! | `scenario` | `scenario` | serde, toml | the TOML scenario contract, validation with file:line:col |
 //! | [`cable`] | — | — | the rope model and its O(n) implicit solve (f64) |
+//! | [`crane`] | — | — | reduced crane models (overhead, tower) from Lagrange's equations |
 //! | [`integrate`] | — | — | time integrators for any second-order system |
 //!
 //! ## Features
 //!
 //! | feature | adds | brings |
 //! |---|---|---|
-//! | (none) | `cable`, `integrate` | glam, thiserror |
+//! | (none) | `cable`, `crane`, `integrate` | glam, thiserror |
 //! | `scenario` | `scenario` | serde, toml |
 //! | `rapier` | `coupling` | rapier3d |
 //! | `sim` | `scenario` + `rapier` + `sim` | — |
@@ -53,6 +54,7 @@ pub use glam;
 pub mod cable;
 #[cfg(feature = "rapier")]
 pub mod coupling;
+pub mod crane;
 pub mod integrate;
 #[cfg(feature = "cli")]
 pub mod output;

@@ -210,38 +210,7 @@ impl SecondOrderSystem for DenseSystem {
         for (idx, e) in a.iter_mut().enumerate() {
             *e = self.mass[idx] + c_v * self.damping[idx] + c_q * self.stiffness[idx];
         }
-        x.copy_from_slice(b);
-        let scale = a.iter().fold(0.0f64, |s, e| s.max(e.abs()));
-        for col in 0..n {
-            let (piv, pmax) = (col..n).map(|r| (r, a[r * n + col].abs())).fold((col, -1.0), |best, c| if c.1 > best.1 { c } else { best });
-            if pmax.is_nan() || pmax <= 1e-14 * scale * n as f64 {
-                return Err(SystemError::Singular { index: col, pivot: a[piv * n + col] });
-            }
-            if piv != col {
-                for j in 0..n {
-                    a.swap(col * n + j, piv * n + j);
-                }
-                x.swap(col, piv);
-            }
-            let p = a[col * n + col];
-            for r in col + 1..n {
-                let f = a[r * n + col] / p;
-                if f != 0.0 {
-                    for j in col..n {
-                        a[r * n + j] -= f * a[col * n + j];
-                    }
-                    x[r] -= f * x[col];
-                }
-            }
-        }
-        for col in (0..n).rev() {
-            let mut s = x[col];
-            for j in col + 1..n {
-                s -= a[col * n + j] * x[j];
-            }
-            x[col] = s / a[col * n + col];
-        }
-        Ok(())
+        gauss_solve(n, a, b, x)
     }
 
     /// `√(λ_max(M⁻¹K))` bounded from above (rad/s): with a diagonal M by
@@ -272,6 +241,44 @@ impl SecondOrderSystem for DenseSystem {
         };
         Some(bound.sqrt())
     }
+}
+
+/// Solves the row-major `n × n` system `a x = b` by Gaussian elimination
+/// with partial pivoting, O(n³) (`a` is overwritten). A pivot below
+/// `1e-14 n max|a|` is [`SystemError::Singular`].
+pub(crate) fn gauss_solve(n: usize, a: &mut [f64], b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
+    x.copy_from_slice(b);
+    let scale = a.iter().fold(0.0f64, |s, e| s.max(e.abs()));
+    for col in 0..n {
+        let (piv, pmax) = (col..n).map(|r| (r, a[r * n + col].abs())).fold((col, -1.0), |best, c| if c.1 > best.1 { c } else { best });
+        if pmax.is_nan() || pmax <= 1e-14 * scale * n as f64 {
+            return Err(SystemError::Singular { index: col, pivot: a[piv * n + col] });
+        }
+        if piv != col {
+            for j in 0..n {
+                a.swap(col * n + j, piv * n + j);
+            }
+            x.swap(col, piv);
+        }
+        let p = a[col * n + col];
+        for r in col + 1..n {
+            let f = a[r * n + col] / p;
+            if f != 0.0 {
+                for j in col..n {
+                    a[r * n + j] -= f * a[col * n + j];
+                }
+                x[r] -= f * x[col];
+            }
+        }
+    }
+    for col in (0..n).rev() {
+        let mut s = x[col];
+        for j in col + 1..n {
+            s -= a[col * n + j] * x[j];
+        }
+        x[col] = s / a[col * n + col];
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -29,6 +29,7 @@ mod state;
 mod system;
 mod wilson;
 
+pub(crate) use self::dense::gauss_solve;
 pub use self::dense::{DenseSystem, DenseSystemError, ForceFn};
 pub use self::error::IntegrateError;
 pub use self::explicit::{substeps_needed, GROWTH, SAFETY};

@@ -1,0 +1,80 @@
+//! Reduced crane models (Bevy-free): few-coordinate machines in the form
+//! every integrator of [`crate::integrate`] steps, for controller design,
+//! fast what-if studies and as references for the full rope simulation
+//! (REFERENCE.md §6–§8, seeds 000, 003, 004).
+//!
+//! * [`OverheadCrane`]: trolley on a rail and a swinging payload;
+//! * [`TowerCrane`]: slewing jib, trolley and a payload swinging in two angles;
+//! * [`Hoist`]: the 3-mass, 2-DOF hoisting mechanism (drive, boom tip,
+//!   payload on the rope) and its dynamic load factor;
+//! * [`lagrange`]: the machinery that derives their equations of motion from
+//!   the positions of their point masses ([`PointMassModel`], [`LagrangeSystem`]).
+//!
+//! Each model gives its closed-form small-swing frequencies and its
+//! linearisation; `tests/crane_models.rs` checks the nonlinear equations
+//! against both and against energy and momentum conservation.
+
+mod hoist;
+pub mod lagrange;
+mod overhead;
+mod tower;
+
+pub use hoist::{Hoist, HoistDrive};
+pub use lagrange::{Jet, LagrangeSystem, PointMassModel};
+pub use overhead::OverheadCrane;
+pub use tower::TowerCrane;
+
+use thiserror::Error;
+
+/// Why a crane model could not be built.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum CraneError {
+    /// A parameter is out of range (NaN, infinite, zero or negative where it
+    /// must be positive).
+    #[error("{model}: {field} = {value} must be {requirement}")]
+    InvalidParameter {
+        /// Which model.
+        model: &'static str,
+        /// Which parameter.
+        field: &'static str,
+        /// The value given.
+        value: f64,
+        /// What it must be.
+        requirement: &'static str,
+    },
+}
+
+pub(crate) fn check_positive(model: &'static str, field: &'static str, value: f64) -> Result<(), CraneError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(CraneError::InvalidParameter { model, field, value, requirement: "positive and finite" })
+    }
+}
+
+/// How a trolley is driven along its rail.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TrolleyDrive {
+    /// A given drive force, N.
+    Force(f64),
+    /// A speed-controlled drive: `F = clamp(gain (command − ẋ), ±max_force)`.
+    Speed {
+        /// Commanded trolley speed, m/s.
+        command: f64,
+        /// Proportional gain of the speed loop, N·s/m.
+        gain: f64,
+        /// Force limit of the drive, N.
+        max_force: f64,
+    },
+}
+
+impl TrolleyDrive {
+    /// The drive force (N) at trolley speed `speed` (m/s).
+    pub fn force(&self, speed: f64) -> f64 {
+        match *self {
+            TrolleyDrive::Force(f) => f,
+            TrolleyDrive::Speed { command, gain, max_force } => (gain * (command - speed)).clamp(-max_force.abs(), max_force.abs()),
+        }
+    }
+}
