@@ -309,3 +309,54 @@ fn hoist_with_a_real_drive_lifts_softer_than_the_estimate() {
     println!("real drive, flexible boom: load factor {dlf:.4} (instant-start estimate {estimate:.4}, rigid boom {:.4})", sys.load_factor_estimate(V_HOIST));
     assert!(dlf > 1.0 && dlf < estimate, "load factor {dlf}");
 }
+
+/// Forestry crane (trolley 300 kg, log bundle 1.5 t, rope 6 m): small
+/// swings in the trolley's plane with the trolley free at
+/// `ω² = g(M+m)/(M l)`, out of it at `ω² = g/l` (the trolley does not take
+/// part), within 1e-5; a conical swing with the trolley held (1e12 kg) at
+/// polar angle 30° and `Ω² = g/(l cos θ)` keeps its polar angle (seed 004's
+/// θ, by `polar_angles`) within 1e-7 rad over 20 s and turns its azimuth at
+/// Ω (within 1e-6); energy stays constant.
+#[test]
+fn forestry_crane_swings_in_both_planes_and_as_a_cone() {
+    let (mm, m, l) = (300.0, 1500.0, 6.0);
+    let crane = ForestryCrane::new(mm, m, l).unwrap();
+    let mut sys = crane.system();
+    for (k, omega) in [(1usize, (G * (mm + m) / (mm * l)).sqrt()), (2, (G / l).sqrt())] {
+        let mut q = vec![0.0; 3];
+        q[k] = 5e-4;
+        let mut state = State::new(&mut sys, 0.0, q, vec![0.0; 3]).unwrap();
+        let ups = upward_crossings(&mut sys, &mut state, k, 1e-3, 45.0);
+        let err = mean_period(&ups) * omega / (2.0 * PI) - 1.0;
+        println!("forestry crane, {}: period error {err:+.2e}", if k == 1 { "in plane" } else { "out of plane" });
+        assert!(ups.len() >= 8 && err.abs() < 1e-5, "period error {err:e}");
+    }
+    // Conical swing: the bundle starts at polar angle θ₀ in the x–y plane
+    // (α = θ₀, β = 0) moving along +z at l sin θ₀ Ω.
+    let held = ForestryCrane::new(1e12, m, l).unwrap();
+    let mut sys = held.system();
+    let theta0 = 30f64.to_radians();
+    let omega = (G / (l * theta0.cos())).sqrt();
+    // β̇ from the bundle's z velocity l cos β β̇ = l sin θ₀ Ω.
+    let mut state = State::new(&mut sys, 0.0, vec![0.0, theta0, 0.0], vec![0.0, 0.0, theta0.sin() * omega]).unwrap();
+    let e0 = sys.kinetic_energy(&state.q, &state.v) + sys.potential_energy(&state.q);
+    let mut integrator = rk4();
+    let (mut dtheta, mut de) = (0.0f64, 0.0f64);
+    let mut turns = 0.0;
+    let mut last_phi = 0.0;
+    while state.t < 20.0 - 1e-12 {
+        integrator.step(&mut sys, &mut state, 1e-3).unwrap();
+        let (theta, phi) = ForestryCrane::polar_angles(state.q[1], state.q[2]);
+        dtheta = dtheta.max((theta - theta0).abs());
+        let mut d = phi - last_phi;
+        if d < -PI {
+            d += 2.0 * PI;
+        }
+        turns += d;
+        last_phi = phi;
+        de = de.max((sys.kinetic_energy(&state.q, &state.v) + sys.potential_energy(&state.q) - e0).abs() / (m * G * l));
+    }
+    let rate_err = turns / 20.0 / omega - 1.0;
+    println!("conical swing at 30°: polar angle within {dtheta:.2e} rad, azimuth rate {rate_err:+.2e}, energy {de:.2e}");
+    assert!(dtheta < 1e-7 && rate_err.abs() < 1e-6 && de < 1e-10, "cone: {dtheta:e}, {rate_err:e}, {de:e}");
+}

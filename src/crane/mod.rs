@@ -5,6 +5,8 @@
 //!
 //! * [`OverheadCrane`]: trolley on a rail and a swinging payload;
 //! * [`TowerCrane`]: slewing jib, trolley and a payload swinging in two angles;
+//! * [`ForestryCrane`]: a trolley and a log bundle swinging in and out of
+//!   the trolley's plane (seed 004);
 //! * [`Hoist`]: the 3-mass, 2-DOF hoisting mechanism (drive, boom tip,
 //!   payload on the rope) and its dynamic load factor;
 //! * [`lagrange`]: the machinery that derives their equations of motion from
@@ -14,11 +16,13 @@
 //! linearisation; `tests/crane_models.rs` checks the nonlinear equations
 //! against both and against energy and momentum conservation.
 
+mod forestry;
 mod hoist;
 pub mod lagrange;
 mod overhead;
 mod tower;
 
+pub use forestry::ForestryCrane;
 pub use hoist::{Hoist, HoistDrive};
 pub use lagrange::{Jet, LagrangeSystem, PointMassModel};
 pub use overhead::OverheadCrane;
