@@ -9,6 +9,9 @@
 //!   the trolley's plane (seed 004);
 //! * [`Hoist`]: the 3-mass, 2-DOF hoisting mechanism (drive, boom tip,
 //!   payload on the rope) and its dynamic load factor;
+//! * [`control`]: anti-sway controllers (ZV/ZVD input shaping, the double
+//!   closed-loop, nonlinear and incremental PIDs) and a closed loop on the
+//!   reduced overhead crane;
 //! * [`lagrange`]: the machinery that derives their equations of motion from
 //!   the positions of their point masses ([`PointMassModel`], [`LagrangeSystem`]).
 //!
@@ -16,6 +19,7 @@
 //! linearisation; `tests/crane_models.rs` checks the nonlinear equations
 //! against both and against energy and momentum conservation.
 
+pub mod control;
 mod forestry;
 mod hoist;
 pub mod lagrange;

@@ -1,0 +1,429 @@
+//! Anti-sway control of a trolley (REFERENCE.md §8, seed 000): input
+//! shaping (ZV, ZVD) of a speed command, the double closed-loop PID, the
+//! nonlinear PID with error-dependent gains, and the incremental digital
+//! PID. Bevy-free: a controller reads a [`TrolleyMeasurement`] and returns
+//! a [`TrolleyCommand`]; [`OverheadCraneLoop`] closes the loop on the
+//! reduced [`OverheadCrane`].
+
+use super::{LagrangeSystem, OverheadCrane, TrolleyDrive};
+
+use crate::integrate::{IntegrateError, Integrator, State};
+
+/// What a trolley controller reads at a sample.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TrolleyMeasurement {
+    /// Time, s.
+    pub time: f64,
+    /// Trolley position along the rail, m.
+    pub position: f64,
+    /// Trolley speed, m/s.
+    pub velocity: f64,
+    /// Sway angle from the downward vertical, rad, positive when the
+    /// payload is ahead of the trolley along the rail.
+    pub sway: f64,
+    /// Sway rate, rad/s.
+    pub sway_rate: f64,
+}
+
+/// What a trolley controller asks of the drive.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TrolleyCommand {
+    /// A drive force, N.
+    Force(f64),
+    /// A trolley speed, m/s (for a speed-controlled drive).
+    Speed(f64),
+}
+
+/// A controller of a trolley on a rail.
+pub trait TrolleyController {
+    /// The command for the sample at `m.time` (called once per sample, in
+    /// time order).
+    fn update(&mut self, m: &TrolleyMeasurement) -> TrolleyCommand;
+}
+
+impl<T: TrolleyController + ?Sized> TrolleyController for Box<T> {
+    fn update(&mut self, m: &TrolleyMeasurement) -> TrolleyCommand {
+        (**self).update(m)
+    }
+}
+
+/// A point-to-point move of the trolley: from `start` (m) at time `t0` (s)
+/// to `target` (m), with a speed limit (m/s) and an acceleration limit
+/// (m/s²): the time-optimal trapezoidal (or triangular) speed profile.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Move {
+    /// Start time, s.
+    pub t0: f64,
+    /// Start position, m.
+    pub start: f64,
+    /// Target position, m.
+    pub target: f64,
+    /// Speed limit, m/s (positive).
+    pub max_speed: f64,
+    /// Acceleration limit, m/s² (positive).
+    pub max_acceleration: f64,
+}
+
+impl Move {
+    /// Acceleration time, cruise time, and the signed cruise speed.
+    fn phases(&self) -> (f64, f64, f64) {
+        let d = (self.target - self.start).abs();
+        let (vm, am) = (self.max_speed.abs(), self.max_acceleration.abs());
+        let sign = (self.target - self.start).signum();
+        if vm <= 0.0 || am <= 0.0 || d == 0.0 {
+            return (0.0, 0.0, 0.0);
+        }
+        let ta = vm / am;
+        if am * ta * ta >= d {
+            // Triangular: never reaches the speed limit.
+            let ta = (d / am).sqrt();
+            (ta, 0.0, sign * am * ta)
+        } else {
+            (ta, (d - am * ta * ta) / vm, sign * vm)
+        }
+    }
+
+    /// Duration of the move, s.
+    pub fn duration(&self) -> f64 {
+        let (ta, tc, _) = self.phases();
+        2.0 * ta + tc
+    }
+
+    /// Commanded speed at time `t`, m/s.
+    pub fn speed(&self, t: f64) -> f64 {
+        let (ta, tc, v) = self.phases();
+        let s = t - self.t0;
+        if s <= 0.0 || s >= 2.0 * ta + tc {
+            0.0
+        } else if s < ta {
+            v * s / ta
+        } else if s <= ta + tc {
+            v
+        } else {
+            v * (2.0 * ta + tc - s) / ta
+        }
+    }
+
+    /// Commanded position at time `t`, m.
+    pub fn position(&self, t: f64) -> f64 {
+        let (ta, tc, v) = self.phases();
+        let s = (t - self.t0).clamp(0.0, 2.0 * ta + tc);
+        if ta == 0.0 {
+            return if t >= self.t0 { self.target } else { self.start };
+        }
+        let a = v / ta;
+        let x = if s < ta {
+            0.5 * a * s * s
+        } else if s <= ta + tc {
+            0.5 * v * ta + v * (s - ta)
+        } else {
+            let r = 2.0 * ta + tc - s;
+            v * (ta + tc) - 0.5 * a * r * r
+        };
+        self.start + x
+    }
+}
+
+/// The input shapers of the crane industry: a sequence of impulses whose
+/// convolution with a command cancels the residual sway of a pendulum of
+/// angular frequency `ω` and damping ratio `ζ` (Singer & Seering 1990).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ShaperKind {
+    /// Zero vibration: 2 impulses over half a damped period.
+    Zv,
+    /// Zero vibration and derivative: 3 impulses over a damped period,
+    /// robust to a frequency error.
+    Zvd,
+}
+
+/// An input shaper: impulse amplitudes (summing to 1) and times, s.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputShaper {
+    /// `(time, amplitude)` of each impulse.
+    pub impulses: Vec<(f64, f64)>,
+}
+
+impl InputShaper {
+    /// The ZV or ZVD shaper for angular frequency `omega` (rad/s) and
+    /// damping ratio `zeta` (0 ≤ ζ < 1): with `K = exp(−ζπ/√(1−ζ²))` and the
+    /// damped half period `T/2 = π/(ω√(1−ζ²))`, ZV is `[1, K]/(1+K)` at
+    /// `[0, T/2]` and ZVD `[1, 2K, K²]/(1+K)²` at `[0, T/2, T]`.
+    pub fn new(kind: ShaperKind, omega: f64, zeta: f64) -> Self {
+        let root = (1.0 - zeta * zeta).max(1e-12).sqrt();
+        let k = (-zeta * std::f64::consts::PI / root).exp();
+        let half = std::f64::consts::PI / (omega * root);
+        let impulses = match kind {
+            ShaperKind::Zv => vec![(0.0, 1.0 / (1.0 + k)), (half, k / (1.0 + k))],
+            ShaperKind::Zvd => {
+                let s = (1.0 + k) * (1.0 + k);
+                vec![(0.0, 1.0 / s), (half, 2.0 * k / s), (2.0 * half, k * k / s)]
+            }
+        };
+        InputShaper { impulses }
+    }
+
+    /// Total delay the shaper adds, s.
+    pub fn duration(&self) -> f64 {
+        self.impulses.last().map_or(0.0, |i| i.0)
+    }
+}
+
+/// Open-loop anti-sway: a [`Move`]'s speed profile convolved with an
+/// [`InputShaper`], sent to a speed-controlled drive.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapedMove {
+    /// The move.
+    pub motion: Move,
+    /// The shaper.
+    pub shaper: InputShaper,
+}
+
+impl ShapedMove {
+    /// The shaped speed command at `t`, m/s.
+    pub fn speed(&self, t: f64) -> f64 {
+        self.shaper.impulses.iter().map(|&(ti, a)| a * self.motion.speed(t - ti)).sum()
+    }
+}
+
+impl TrolleyController for ShapedMove {
+    fn update(&mut self, m: &TrolleyMeasurement) -> TrolleyCommand {
+        TrolleyCommand::Speed(self.speed(m.time))
+    }
+}
+
+/// Gains of one PID loop: proportional (per unit of error), integral (per
+/// unit of error·s) and derivative (per unit of error/s).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PidGains {
+    /// Proportional gain.
+    pub kp: f64,
+    /// Integral gain.
+    pub ki: f64,
+    /// Derivative gain.
+    pub kd: f64,
+}
+
+/// The double closed-loop PID of seed 000: an outer loop on the trolley
+/// position (error `e = x_ref − x`, with the reference following a
+/// [`Move`]) and an inner loop on the sway angle, both acting on the drive
+/// force, `F = PID_x(e) + PID_θ(θ)`, clamped to `±max_force` (N; the
+/// integral stops growing while the output saturates). Derivatives use the
+/// measured rates (no derivative kick). Position gains in N/m, N/(m·s),
+/// N·s/m; sway gains in N/rad, N/(rad·s), N·s/rad.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DoubleLoopPid {
+    /// The reference move.
+    pub motion: Move,
+    /// Position loop gains.
+    pub position: PidGains,
+    /// Sway loop gains.
+    pub sway: PidGains,
+    /// Force limit, N.
+    pub max_force: f64,
+    /// Error-dependent gain schedule of the position loop (the nonlinear
+    /// PID), or `None` for fixed gains.
+    pub schedule: Option<NonlinearSchedule>,
+    integral: (f64, f64),
+    last_time: Option<f64>,
+}
+
+/// The nonlinear PID's error-dependent gains (seed 000: strong
+/// proportional action on a large error, more integral action on a small
+/// one): with the position error `e` (m),
+/// `k_p(e) = kp (1 + p_gain (1 − sech(e/e_p)))`,
+/// `k_i(e) = ki sech(e/e_i)`, `k_d(e) = kd (1 + d_gain (1 − sech(e/e_p)))`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NonlinearSchedule {
+    /// Extra proportional gain at large errors (dimensionless).
+    pub p_gain: f64,
+    /// Extra derivative gain at large errors (dimensionless).
+    pub d_gain: f64,
+    /// Error scale of the proportional and derivative schedule, m.
+    pub e_p: f64,
+    /// Error scale beyond which the integral fades, m.
+    pub e_i: f64,
+}
+
+fn sech(x: f64) -> f64 {
+    1.0 / x.cosh()
+}
+
+impl DoubleLoopPid {
+    /// A double-loop PID following `motion` with fixed gains.
+    pub fn new(motion: Move, position: PidGains, sway: PidGains, max_force: f64) -> Self {
+        DoubleLoopPid { motion, position, sway, max_force, schedule: None, integral: (0.0, 0.0), last_time: None }
+    }
+
+    /// The nonlinear PID: the same loops with the position gains scheduled
+    /// on the error.
+    pub fn nonlinear(mut self, schedule: NonlinearSchedule) -> Self {
+        self.schedule = Some(schedule);
+        self
+    }
+
+    /// Gains that place the poles of the double-loop PD on the
+    /// linearised crane ([`OverheadCrane::linearized`], no damping) at the
+    /// two pairs `s² + 2ζ_k ω_k s + ω_k²` (ω in rad/s): with
+    /// `M ẍ = F + m g θ`, `l θ̈ = −ẍ − g θ` and
+    /// `F = −K_p x − K_d ẋ + K_θ θ + C_θ θ̇`, the closed loop is
+    /// `M l s⁴ + (K_d l + C_θ) s³ + (K_p l + (M+m) g + K_θ) s² + K_d g s + K_p g`,
+    /// matched term by term. Returns `(position, sway)` gains with no
+    /// integral action (add a small `ki` for zero steady-state error).
+    pub fn place_poles(crane: &OverheadCrane, poles: [(f64, f64); 2]) -> (PidGains, PidGains) {
+        let (mm, m, l, g) = (crane.trolley_mass, crane.payload_mass, crane.rope_length, crane.gravity);
+        let [(w1, z1), (w2, z2)] = poles;
+        let ml = mm * l;
+        let kp = ml * w1 * w1 * w2 * w2 / g;
+        let kd = ml * (2.0 * z1 * w1 * w2 * w2 + 2.0 * z2 * w2 * w1 * w1) / g;
+        let c_theta = ml * (2.0 * z1 * w1 + 2.0 * z2 * w2) - kd * l;
+        let k_theta = ml * (w1 * w1 + w2 * w2 + 4.0 * z1 * z2 * w1 * w2) - kp * l - (mm + m) * g;
+        (PidGains { kp, ki: 0.0, kd }, PidGains { kp: k_theta, ki: 0.0, kd: c_theta })
+    }
+
+    fn gains(&self, e: f64) -> PidGains {
+        match self.schedule {
+            None => self.position,
+            Some(s) => {
+                let grow = 1.0 - sech(e / s.e_p);
+                PidGains {
+                    kp: self.position.kp * (1.0 + s.p_gain * grow),
+                    ki: self.position.ki * sech(e / s.e_i),
+                    kd: self.position.kd * (1.0 + s.d_gain * grow),
+                }
+            }
+        }
+    }
+}
+
+impl TrolleyController for DoubleLoopPid {
+    fn update(&mut self, m: &TrolleyMeasurement) -> TrolleyCommand {
+        let dt = self.last_time.map_or(0.0, |t| (m.time - t).max(0.0));
+        self.last_time = Some(m.time);
+        let e = self.motion.position(m.time) - m.position;
+        let de = self.motion.speed(m.time) - m.velocity;
+        let g = self.gains(e);
+        let unclamped = g.kp * e + g.ki * self.integral.0 + g.kd * de + self.sway.kp * m.sway + self.sway.ki * self.integral.1 + self.sway.kd * m.sway_rate;
+        let f = unclamped.clamp(-self.max_force, self.max_force);
+        // Conditional integration: no wind-up while saturated.
+        if f == unclamped {
+            self.integral.0 += e * dt;
+            self.integral.1 += m.sway * dt;
+        }
+        TrolleyCommand::Force(f)
+    }
+}
+
+/// The incremental (velocity-form) digital PID of seed 000 on both loops:
+/// sampled every `sample_time` (s) and held in between,
+/// `Δu(k) = Kp [e(k) − e(k−1)] + Ki T e(k) + (Kd/T) [e(k) − 2e(k−1) + e(k−2)]`
+/// for the position error and the same for the sway angle, `u` summed and
+/// clamped to `±max_force` (N) (the clamp of the accumulated output is the
+/// velocity form's built-in anti-windup).
+#[derive(Clone, Debug, PartialEq)]
+pub struct IncrementalPid {
+    /// The reference move.
+    pub motion: Move,
+    /// Position loop gains.
+    pub position: PidGains,
+    /// Sway loop gains.
+    pub sway: PidGains,
+    /// Sample time `T`, s.
+    pub sample_time: f64,
+    /// Force limit, N.
+    pub max_force: f64,
+    history: [(f64, f64); 2],
+    output: f64,
+    next_sample: Option<f64>,
+}
+
+impl IncrementalPid {
+    /// An incremental PID sampled every `sample_time` (s).
+    pub fn new(motion: Move, position: PidGains, sway: PidGains, sample_time: f64, max_force: f64) -> Self {
+        IncrementalPid { motion, position, sway, sample_time, max_force, history: [(0.0, 0.0); 2], output: 0.0, next_sample: None }
+    }
+}
+
+impl TrolleyController for IncrementalPid {
+    fn update(&mut self, m: &TrolleyMeasurement) -> TrolleyCommand {
+        let due = self.next_sample.is_none_or(|t| m.time >= t - 1e-9 * self.sample_time);
+        if due {
+            let t = self.sample_time;
+            // Errors: position `x_ref − x`; the sway loop acts on `θ` with
+            // the double-loop PID's signs (its set point is 0).
+            let e = (self.motion.position(m.time) - m.position, m.sway);
+            let [e1, e2] = self.history;
+            let inc = |g: &PidGains, e: f64, e1: f64, e2: f64| g.kp * (e - e1) + g.ki * t * e + g.kd / t * (e - 2.0 * e1 + e2);
+            let du = inc(&self.position, e.0, e1.0, e2.0) + inc(&self.sway, e.1, e1.1, e2.1);
+            self.output = (self.output + du).clamp(-self.max_force, self.max_force);
+            self.history = [e, e1];
+            self.next_sample = Some(self.next_sample.map_or(m.time, |s| s) + t);
+        }
+        TrolleyCommand::Force(self.output)
+    }
+}
+
+/// One sample of a closed-loop run.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct LoopSample {
+    /// The measurement.
+    pub measurement: TrolleyMeasurement,
+    /// The drive force applied, N.
+    pub force: f64,
+}
+
+/// A controller closing the loop on the reduced [`OverheadCrane`]: every
+/// step `h` it reads the state, asks the controller, sets the drive (a
+/// force, or a speed loop of `speed_gain` N·s/m limited to `max_force` N),
+/// and steps the nonlinear model with the default integrator.
+pub struct OverheadCraneLoop<C: TrolleyController> {
+    /// The plant.
+    pub system: LagrangeSystem<OverheadCrane>,
+    /// Its state.
+    pub state: State,
+    /// The controller.
+    pub controller: C,
+    /// Speed-loop gain for speed commands, N·s/m.
+    pub speed_gain: f64,
+    /// Drive force limit, N.
+    pub max_force: f64,
+    integrator: Integrator,
+}
+
+impl<C: TrolleyController> OverheadCraneLoop<C> {
+    /// The crane at rest at trolley position `x0` (m), hanging still.
+    pub fn new(crane: OverheadCrane, controller: C, x0: f64, speed_gain: f64, max_force: f64) -> Result<Self, IntegrateError> {
+        let mut system = crane.system();
+        let state = State::new(&mut system, 0.0, vec![x0, 0.0], vec![0.0, 0.0])?;
+        Ok(OverheadCraneLoop { system, state, controller, speed_gain, max_force, integrator: Integrator::default() })
+    }
+
+    /// The current measurement.
+    pub fn measurement(&self) -> TrolleyMeasurement {
+        let (q, v) = (&self.state.q, &self.state.v);
+        TrolleyMeasurement { time: self.state.t, position: q[0], velocity: v[0], sway: q[1], sway_rate: v[1] }
+    }
+
+    /// Gives the payload a horizontal push of `impulse` N·s along the rail
+    /// (a change of the payload's velocity `impulse/m` with the trolley's
+    /// velocity unchanged), then recomputes the accelerations.
+    pub fn push_payload(&mut self, impulse: f64) -> Result<(), IntegrateError> {
+        let crane = &self.system.model;
+        let (m, l) = (crane.payload_mass, crane.rope_length);
+        // The payload's horizontal velocity is ẋ + l θ̇ cos θ.
+        self.state.v[1] += impulse / (m * l * self.state.q[1].cos());
+        self.state.recompute_acceleration(&mut self.system)
+    }
+
+    /// One control sample and one step of `h` seconds.
+    pub fn step(&mut self, h: f64) -> Result<LoopSample, IntegrateError> {
+        let measurement = self.measurement();
+        let drive = match self.controller.update(&measurement) {
+            TrolleyCommand::Force(f) => TrolleyDrive::Force(f.clamp(-self.max_force, self.max_force)),
+            TrolleyCommand::Speed(v) => TrolleyDrive::Speed { command: v, gain: self.speed_gain, max_force: self.max_force },
+        };
+        self.system.model.drive = drive;
+        let force = drive.force(measurement.velocity);
+        self.integrator.step(&mut self.system, &mut self.state, h)?;
+        Ok(LoopSample { measurement, force })
+    }
+}
