@@ -153,7 +153,7 @@ pub(crate) fn velocity_drive_motor(target: f64, max_force: f64, h: f64) -> rp::J
 /// `axis` over a step of `h` s: target `target` (m/s or rad/s),
 /// acceleration-based damping `1/h` (the velocity error halves every
 /// step), saturating at `max_force` (N or N·m), in rapier's f32.
-#[cfg(feature = "sim")]
+#[cfg(any(feature = "sim", feature = "app"))]
 pub(crate) fn set_velocity_drive(data: &mut rp::GenericJoint, axis: rp::JointAxis, target: f64, max_force: f64, h: f64) {
     data.set_motor_model(axis, rp::MotorModel::AccelerationBased);
     data.set_motor_velocity(axis, target as f32, (1.0 / h) as f32);

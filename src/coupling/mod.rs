@@ -79,9 +79,12 @@ mod explicit;
 
 #[cfg_attr(not(any(feature = "app", feature = "sim")), allow(unused_imports))]
 pub(crate) use self::explicit::{follow, rail_motor, reaction, BodySample};
-// Scenario velocity drives (the runner and `plugin::scenario`):
+// Scenario velocity drives (the runner and `plugin::scenario`), and the
+// plugin's trolley controllers:
+#[cfg(any(feature = "sim", feature = "app"))]
+pub(crate) use self::explicit::set_velocity_drive;
 #[cfg(feature = "sim")]
-pub(crate) use self::explicit::{set_velocity_drive, velocity_drive_motor};
+pub(crate) use self::explicit::velocity_drive_motor;
 use crate::cable::chain::rotation_vector;
 use crate::cable::{
     BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeModel, RopeStart,

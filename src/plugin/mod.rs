@@ -120,6 +120,7 @@
 //! Tested in `tests/plugin_lifecycle.rs`.
 
 mod components;
+mod control;
 #[cfg(feature = "render")]
 pub mod render;
 #[cfg(feature = "sim")]
@@ -129,6 +130,7 @@ mod systems;
 pub use self::components::{
     BodyExact, CableAnchor, CableDescriptor, CableError, CableErrorKind, CableExact, CablePointLoad, CableRopeOf, CableSim, CableState, CarriedBody,
 };
+pub use self::control::TrolleyControl;
 use bevy::ecs::schedule::{InternedScheduleLabel, ScheduleConfigs, ScheduleLabel};
 use bevy::ecs::system::ScheduleSystem;
 use bevy::prelude::*;
@@ -337,6 +339,9 @@ impl Plugin for CablePlugin {
         for set in [CableSystems::Init, CableSystems::Step, CableSystems::WriteBodies, CableSystems::Readout] {
             app.add_systems(schedule, Self::get_systems(set));
         }
+        // Trolley controllers write their commands before rapier and the
+        // cables take their inputs.
+        app.add_systems(schedule, control::trolley_control.before(PhysicsSet::SyncBackend));
     }
 
     fn finish(&self, app: &mut App) {
