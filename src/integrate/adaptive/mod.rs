@@ -216,7 +216,7 @@ impl AdaptiveSettings {
                 return bad("initial step (must be finite and > 0)", h);
             }
         }
-        if !(self.max_step > 0.0) {
+        if self.max_step.is_nan() || self.max_step <= 0.0 {
             return bad("max step (must be > 0)", self.max_step);
         }
         if self.max_steps == 0 {
@@ -271,7 +271,7 @@ fn check_start<S: SecondOrderSystem + ?Sized>(sys: &S, settings: &AdaptiveSettin
 /// Fails when `h` is below what `t` can resolve.
 fn clip_step(max_step: f64, t: f64, t_end: f64, h: f64) -> Result<(f64, bool), AdaptiveError> {
     let h = h.min(max_step);
-    if !(h >= 10.0 * f64::EPSILON * t.abs().max(f64::MIN_POSITIVE)) {
+    if h.is_nan() || h < 10.0 * f64::EPSILON * t.abs().max(f64::MIN_POSITIVE) {
         return Err(AdaptiveError::StepUnderflow { t, h });
     }
     if t + 1.01 * h >= t_end {
