@@ -194,7 +194,8 @@ fn trbdf2_oscillator_fixed_step_order_two_and_adaptive_accuracy() {
         errors.push(run.end_error);
     }
     let ratios: Vec<f64> = errors.windows(2).map(|w| w[0] / w[1]).collect();
-    println!("TR-BDF2 fixed step on the oscillator, h = T/100..T/800: errors {errors:.3?}, ratios {ratios:.4?}");
+    let printed: Vec<String> = errors.iter().map(|e| format!("{e:.3e}")).collect();
+    println!("TR-BDF2 fixed step on the oscillator, h = T/100..T/800: errors {printed:?}, ratios {ratios:.4?}");
     for r in &ratios[1..] {
         assert!((r - 4.0).abs() < 0.05 * 4.0, "second order: ratio {r}");
     }
@@ -250,8 +251,8 @@ fn trbdf2_pendulum_energy_is_dissipated_within_the_tolerance() {
         let grad = (p.natural_frequency().powi(4) + 2.0 * e0).sqrt();
         let bound = total.accepted_steps as f64 * grad * local_allowance(1, tol, tol, z_max) / e0;
         println!(
-            "TR-BDF2 pendulum 150 deg, tol {tol:.0e}, 10 periods: {} steps, {} rejected, {} Newton iterations; energy drift {drift:.2e} (bound {bound:.1e}), worst rise per step {worst_rise:.1e}, state error after 10 periods {phase:.2e}",
-            total.accepted_steps, total.rejected_steps, total.newton_iterations
+            "TR-BDF2 pendulum 150 deg, tol {tol:.0e}, 10 periods: {} steps, {} rejected ({} Newton failures), {} Newton iterations; energy drift {drift:.2e} (bound {bound:.1e}), worst rise per step {worst_rise:.1e}, state error after 10 periods {phase:.2e}",
+            total.accepted_steps, total.rejected_steps, total.newton_failures, total.newton_iterations
         );
         assert!(drift < 0.0 && -drift <= bound, "dissipative, within the sum of local errors");
         assert!(-drift < previous, "the drift falls with the tolerance");
