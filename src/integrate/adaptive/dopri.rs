@@ -49,9 +49,9 @@ const BETA: f64 = 0.04;
 ///
 /// Step control as in Hairer's `DOPRI5`: the 4th-order embedded error,
 /// Hairer's mixed norm ([`AdaptiveSettings`]), the PI controller
-/// `h_new = h · err^(−0.2 + 0.75 β) · err_prev^β / safety` with `β = 0.04`,
-/// factors in `[1/fac_max, 1/fac_min]`^(−1), no growth right after a
-/// rejection. Explicit: on a stiff system its step is held near the
+/// `h_new = h · safety · err^(−0.2 + 0.75 β) · err_prev^β` with `β = 0.04`,
+/// the change limited to a factor in `[fac_min, fac_max]`, no growth right
+/// after a rejection. Explicit: on a stiff system its step is held near the
 /// stability limit `≈ 3.3/ω_max`, whatever the tolerance (use [`TrBdf2`](super::TrBdf2)).
 ///
 /// ```
@@ -105,44 +105,7 @@ impl DormandPrince {
         })
     }
 
-    /// Sets one absolute tolerance per component of `z = (q, v)`: the `n`
-    /// coordinates (m or rad), then the `n` velocities (m/s or rad/s).
-    pub fn with_atol_components(mut self, atol: Vec<f64>) -> Result<Self, AdaptiveError> {
-        self.settings.atol_components = Some(atol);
-        self.settings.validate(None)?;
-        Ok(self)
-    }
-
-    /// Sets the first step (s, `> 0`) instead of the automatic choice.
-    pub fn with_initial_step(mut self, h: f64) -> Result<Self, AdaptiveError> {
-        self.settings.initial_step = Some(h);
-        self.settings.validate(None)?;
-        Ok(self)
-    }
-
-    /// Sets the largest step (s, `> 0`).
-    pub fn with_max_step(mut self, h: f64) -> Result<Self, AdaptiveError> {
-        self.settings.max_step = h;
-        self.settings.validate(None)?;
-        Ok(self)
-    }
-
-    /// Sets the most step attempts per call (`≥ 1`).
-    pub fn with_max_steps(mut self, n: usize) -> Result<Self, AdaptiveError> {
-        self.settings.max_steps = n;
-        self.settings.validate(None)?;
-        Ok(self)
-    }
-
-    /// The step (s) the controller will try next (0 before the first step).
-    pub fn next_step(&self) -> f64 {
-        self.h
-    }
-
-    /// The last accepted step as `(start, length)`, s.
-    pub fn last_step(&self) -> Option<(f64, f64)> {
-        self.last
-    }
+    adaptive_api!();
 
     /// Forgets the step size and the last step (call it after changing the
     /// state by hand or switching systems).
@@ -150,29 +113,6 @@ impl DormandPrince {
         self.h = 0.0;
         self.err_prev = 1e-4;
         self.last = None;
-    }
-
-    /// Integrates `state` to `t_end` (s), landing on it exactly. The state's
-    /// acceleration must be consistent with `(t, q, v)` ([`State::new`] and
-    /// every step leave it so).
-    pub fn integrate<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, t_end: f64) -> Result<AdaptiveStats, AdaptiveError> {
-        let mut stats = AdaptiveStats::default();
-        let mut budget = self.settings.max_steps;
-        while check_start(sys, &self.settings, state, t_end)? {
-            self.advance(sys, state, t_end, &mut budget, &mut stats)?;
-        }
-        Ok(stats)
-    }
-
-    /// Takes one accepted step from `state` towards `t_end` (s), never past
-    /// it (after rejected attempts if the error test asks for them).
-    pub fn step<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, t_end: f64) -> Result<AdaptiveStats, AdaptiveError> {
-        let mut stats = AdaptiveStats::default();
-        let mut budget = self.settings.max_steps;
-        if check_start(sys, &self.settings, state, t_end)? {
-            self.advance(sys, state, t_end, &mut budget, &mut stats)?;
-        }
-        Ok(stats)
     }
 
     /// The solution at `t` (s) inside the last accepted step, from the

@@ -16,6 +16,79 @@
 //! either can follow a step of any [`Integrator`](super::Integrator) scheme
 //! that does (and vice versa).
 
+/// The builder, query and driver methods both integrators share (they
+/// have `settings`, `h`, `last` and an `advance` method of the same shape).
+macro_rules! adaptive_api {
+    () => {
+        /// Sets one absolute tolerance per component of `z = (q, v)`: the `n`
+        /// coordinates (m or rad), then the `n` velocities (m/s or rad/s).
+        pub fn with_atol_components(mut self, atol: Vec<f64>) -> Result<Self, AdaptiveError> {
+            self.settings.atol_components = Some(atol);
+            self.settings.validate(None)?;
+            Ok(self)
+        }
+
+        /// Sets the first step (s, `> 0`) instead of the automatic choice.
+        pub fn with_initial_step(mut self, h: f64) -> Result<Self, AdaptiveError> {
+            self.settings.initial_step = Some(h);
+            self.settings.validate(None)?;
+            Ok(self)
+        }
+
+        /// Sets the largest step (s, `> 0`).
+        pub fn with_max_step(mut self, h: f64) -> Result<Self, AdaptiveError> {
+            self.settings.max_step = h;
+            self.settings.validate(None)?;
+            Ok(self)
+        }
+
+        /// Sets the most step attempts per call (`≥ 1`).
+        pub fn with_max_steps(mut self, n: usize) -> Result<Self, AdaptiveError> {
+            self.settings.max_steps = n;
+            self.settings.validate(None)?;
+            Ok(self)
+        }
+
+        /// The step (s) the controller will try next (0 before the first step).
+        pub fn next_step(&self) -> f64 {
+            self.h
+        }
+
+        /// The last accepted step as `(start, length)`, s.
+        pub fn last_step(&self) -> Option<(f64, f64)> {
+            self.last
+        }
+
+        /// Integrates `state` to `t_end` (s), landing on it exactly. The state's
+        /// acceleration must be consistent with `(t, q, v)` ([`State::new`] and
+        /// every step of either adaptive integrator leave it so, TR-BDF2 to
+        /// its Newton tolerance).
+        pub fn integrate<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, t_end: f64) -> Result<AdaptiveStats, AdaptiveError> {
+            self.drive(sys, state, t_end, true)
+        }
+
+        /// Takes one accepted step from `state` towards `t_end` (s), never past
+        /// it (after rejected attempts if the error test asks for them).
+        pub fn step<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, t_end: f64) -> Result<AdaptiveStats, AdaptiveError> {
+            self.drive(sys, state, t_end, false)
+        }
+
+        /// Accepted steps towards `t_end` until it is reached (`all`) or
+        /// one (not `all`), within one attempt budget.
+        fn drive<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, t_end: f64, all: bool) -> Result<AdaptiveStats, AdaptiveError> {
+            let mut stats = AdaptiveStats::default();
+            let mut budget = self.settings.max_steps;
+            while check_start(sys, &self.settings, state, t_end)? {
+                self.advance(sys, state, t_end, &mut budget, &mut stats)?;
+                if !all {
+                    break;
+                }
+            }
+            Ok(stats)
+        }
+    };
+}
+
 mod dopri;
 mod trbdf2;
 
@@ -75,7 +148,9 @@ pub enum AdaptiveError {
         /// The limit ([`AdaptiveSettings::max_steps`]).
         max_steps: usize,
     },
-    /// The starting state is NaN or infinite.
+    /// The starting state is NaN or infinite. (A trial step that goes
+    /// non-finite is rejected and retried smaller; if that never ends, the
+    /// integration stops with [`StepUnderflow`](Self::StepUnderflow).)
     #[error("non-finite state at t = {t} s")]
     NonFinite {
         /// Time of the state, s.

@@ -100,34 +100,7 @@ impl TrBdf2 {
         })
     }
 
-    /// Sets one absolute tolerance per component of `z = (q, v)`: the `n`
-    /// coordinates (m or rad), then the `n` velocities (m/s or rad/s).
-    pub fn with_atol_components(mut self, atol: Vec<f64>) -> Result<Self, AdaptiveError> {
-        self.settings.atol_components = Some(atol);
-        self.settings.validate(None)?;
-        Ok(self)
-    }
-
-    /// Sets the first step (s, `> 0`) instead of the automatic choice.
-    pub fn with_initial_step(mut self, h: f64) -> Result<Self, AdaptiveError> {
-        self.settings.initial_step = Some(h);
-        self.settings.validate(None)?;
-        Ok(self)
-    }
-
-    /// Sets the largest step (s, `> 0`).
-    pub fn with_max_step(mut self, h: f64) -> Result<Self, AdaptiveError> {
-        self.settings.max_step = h;
-        self.settings.validate(None)?;
-        Ok(self)
-    }
-
-    /// Sets the most step attempts per call (`≥ 1`).
-    pub fn with_max_steps(mut self, n: usize) -> Result<Self, AdaptiveError> {
-        self.settings.max_steps = n;
-        self.settings.validate(None)?;
-        Ok(self)
-    }
+    adaptive_api!();
 
     /// Sets the Newton settings of the stages.
     pub fn with_newton(mut self, newton: NewtonSettings) -> Self {
@@ -135,43 +108,10 @@ impl TrBdf2 {
         self
     }
 
-    /// The step (s) the controller will try next (0 before the first step).
-    pub fn next_step(&self) -> f64 {
-        self.h
-    }
-
-    /// The last accepted step as `(start, length)`, s.
-    pub fn last_step(&self) -> Option<(f64, f64)> {
-        self.last
-    }
-
     /// Forgets the step size and the last step.
     pub fn reset(&mut self) {
         self.h = 0.0;
         self.last = None;
-    }
-
-    /// Integrates `state` to `t_end` (s), landing on it exactly. The state's
-    /// acceleration must be consistent with `(t, q, v)` ([`State::new`] and
-    /// every step leave it so, to the Newton tolerance).
-    pub fn integrate<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, t_end: f64) -> Result<AdaptiveStats, AdaptiveError> {
-        let mut stats = AdaptiveStats::default();
-        let mut budget = self.settings.max_steps;
-        while check_start(sys, &self.settings, state, t_end)? {
-            self.advance(sys, state, t_end, &mut budget, &mut stats)?;
-        }
-        Ok(stats)
-    }
-
-    /// Takes one accepted step from `state` towards `t_end` (s), never past
-    /// it.
-    pub fn step<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, t_end: f64) -> Result<AdaptiveStats, AdaptiveError> {
-        let mut stats = AdaptiveStats::default();
-        let mut budget = self.settings.max_steps;
-        if check_start(sys, &self.settings, state, t_end)? {
-            self.advance(sys, state, t_end, &mut budget, &mut stats)?;
-        }
-        Ok(stats)
     }
 
     /// The solution at `t` (s) inside the last accepted step (cubic
