@@ -511,3 +511,23 @@ fn trbdf2_steps_a_rope_chain_with_its_own_solve_to_the_static_stretch() {
     assert_eq!(stats.newton_failures, 0);
     assert!(dp.accepted_steps > 10 * stats.accepted_steps, "explicit: stability-limited by the overdamped element modes");
 }
+
+#[test]
+fn component_tolerances_act_per_component() {
+    let run = |solver: DormandPrince| {
+        let mut solver = solver;
+        let mut sys = damped_oscillator(1.0, 0.0);
+        let mut state = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).expect("state");
+        let stats = solver.integrate(&mut sys, &mut state, TAU).expect("integrate");
+        (stats, state)
+    };
+    let scalar = run(DormandPrince::new(1e-8, 1e-8).expect("valid"));
+    let same = run(DormandPrince::new(1e-8, 1.0).and_then(|s| s.with_atol_components(vec![1e-8, 1e-8])).expect("valid"));
+    assert_eq!(scalar, same, "the component list replaces the scalar");
+    // A loose absolute tolerance on one component needs fewer steps (with
+    // rtol = 0 only the absolute part remains).
+    let tight = run(DormandPrince::new(1e-12, 0.0).and_then(|s| s.with_atol_components(vec![1e-8, 1e-8])).expect("valid"));
+    let loose = run(DormandPrince::new(1e-12, 0.0).and_then(|s| s.with_atol_components(vec![1e-8, 1e-2])).expect("valid"));
+    println!("component atol (1e-8, 1e-8): {} steps; (1e-8, 1e-2): {} steps", tight.0.accepted_steps, loose.0.accepted_steps);
+    assert!(loose.0.accepted_steps < tight.0.accepted_steps);
+}

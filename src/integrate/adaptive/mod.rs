@@ -357,14 +357,15 @@ fn clip_step(max_step: f64, t: f64, t_end: f64, h: f64) -> Result<(f64, bool), A
 }
 
 /// Hairer's starting step (*Solving ODEs I*, II.4, algorithm `hinit`) for a
-/// method of order `order`, with one extra function evaluation.
+/// method whose local error estimate goes as `h^error_order` (DOPRI5: 5,
+/// TR-BDF2: 3), with one extra function evaluation.
 #[allow(clippy::too_many_arguments)]
 fn initial_step<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     settings: &AdaptiveSettings,
     state: &State,
     t_end: f64,
-    order: i32,
+    error_order: i32,
     ws: &mut Workspace,
     stats: &mut AdaptiveStats,
 ) -> Result<f64, AdaptiveError> {
@@ -393,7 +394,7 @@ fn initial_step<S: SecondOrderSystem + ?Sized>(
     let df: Vec<f64> = (0..2 * n).map(|i| if i < n { ws.v[i] - state.v[i] } else { ws.x[i - n] - state.a[i - n] } / h0).collect();
     let d2 = settings.error_norm(&df, &z0, &zero);
     let dm = d1.max(d2);
-    let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(1.0 / f64::from(order + 1)) };
+    let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(1.0 / f64::from(error_order)) };
     Ok((100.0 * h0).min(h1).min(settings.max_step))
 }
 

@@ -154,7 +154,7 @@ impl TrBdf2 {
         let n = state.dof();
         self.ensure(n);
         if self.h <= 0.0 {
-            self.h = initial_step(sys, &self.settings, state, t_end, 2, &mut self.ws, stats)?;
+            self.h = initial_step(sys, &self.settings, state, t_end, 3, &mut self.ws, stats)?;
         }
         let t = state.t;
         let mut h = self.h;
