@@ -108,6 +108,10 @@ fn dopri_oscillators_error_falls_with_tolerance_order_five() {
             assert_eq!(s.solves, s.residual_evals);
             assert!(run.max_step_error <= bound, "global error within the sum of local allowances");
             assert!(run.max_dense_error <= bound, "dense output within the same budget");
+            // The continuous extension is 4th order: its own error is of the
+            // size of the embedded 4th-order estimate, at most one step's
+            // allowance on top of the error at the step ends.
+            assert!(run.max_dense_error <= run.max_step_error + local_allowance(1, tol, tol, 1.0));
             assert!(run.end_error < previous, "error falls with the tolerance");
             previous = run.end_error;
             points.push((s.residual_evals as f64, run.max_step_error));
