@@ -412,6 +412,13 @@ fn errors_are_typed_and_name_the_time() {
     let e = dp.dense_output(1.0, &mut [0.0], &mut [0.0]).expect_err("no step yet");
     println!("{e}");
     assert!(matches!(e, AdaptiveError::OutsideStep { .. }));
+    let mut stepped = state.clone();
+    tr.step(&mut sys, &mut stepped, 2.0).expect("step");
+    let (t0, h) = tr.last_step().expect("a step");
+    assert!(matches!(tr.dense_output(t0 + 2.0 * h, &mut [0.0], &mut [0.0]), Err(AdaptiveError::OutsideStep { .. })));
+    let e = tr.dense_output(t0, &mut [0.0], &mut [0.0; 2]).expect_err("wrong length");
+    println!("{e}");
+    assert!(matches!(e, AdaptiveError::Integrate(IntegrateError::DimensionMismatch { what: "dense output v", expected: 1, got: 2, .. })));
     // Component tolerances: 2n of them.
     let mut bad = DormandPrince::new(1e-6, 1e-6).and_then(|s| s.with_atol_components(vec![1e-6])).expect("checked at the step");
     assert!(matches!(bad.integrate(&mut sys, &mut state, 2.0), Err(AdaptiveError::InvalidParameter { .. })));

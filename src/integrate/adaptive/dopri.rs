@@ -2,11 +2,10 @@
 //! his 4th-order continuous extension (the `DOPRI5` code of Hairer,
 //! Nørsett & Wanner, *Solving ODEs I*, II.5 and II.6).
 
-use super::super::error::IntegrateError;
 use super::super::integrator::{StepStats, Workspace};
 use super::super::state::{acceleration, State};
 use super::super::system::SecondOrderSystem;
-use super::{check_start, initial_step, is_non_finite, step_loop, theta_in, workspace, AdaptiveError, AdaptiveSettings, AdaptiveStats, Attempt};
+use super::{check_output, check_start, initial_step, is_non_finite, step_loop, theta_in, workspace, AdaptiveError, AdaptiveSettings, AdaptiveStats, Attempt};
 
 /// Nodes `c₂ … c₇`.
 const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
@@ -121,9 +120,7 @@ impl DormandPrince {
     pub fn dense_output(&self, t: f64, q: &mut [f64], v: &mut [f64]) -> Result<(), AdaptiveError> {
         let theta = theta_in(t, self.last)?;
         let n = self.z0.len() / 2;
-        if q.len() != n || v.len() != n {
-            return Err(IntegrateError::DimensionMismatch { t, what: "dense output", expected: n, got: q.len().min(v.len()) }.into());
-        }
+        check_output(t, n, q, v)?;
         let theta1 = 1.0 - theta;
         let [r1, r2, r3, r4, r5] = &self.cont;
         for i in 0..2 * n {

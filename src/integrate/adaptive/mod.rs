@@ -480,3 +480,13 @@ fn theta_in(t: f64, step: Option<(f64, f64)>) -> Result<f64, AdaptiveError> {
         Err(AdaptiveError::OutsideStep { t, start, end: start + h })
     }
 }
+
+/// Checks the lengths of the dense-output buffers against `n` coordinates.
+fn check_output(t: f64, n: usize, q: &[f64], v: &[f64]) -> Result<(), AdaptiveError> {
+    for (what, x) in [("dense output q", q), ("dense output v", v)] {
+        if x.len() != n {
+            return Err(IntegrateError::DimensionMismatch { t, what, expected: n, got: x.len() }.into());
+        }
+    }
+    Ok(())
+}

@@ -4,13 +4,13 @@
 
 use std::f64::consts::SQRT_2;
 
-use super::super::error::IntegrateError;
 use super::super::integrator::{StepStats, Workspace};
 use super::super::newton::{self, Affine, Failure, NewtonSettings, MAX_BRANCH_UPDATES};
 use super::super::state::State;
 use super::super::system::SecondOrderSystem;
 use super::{
-    check_start, classic_factor, hermite, initial_step, is_non_finite, step_loop, theta_in, workspace, AdaptiveError, AdaptiveSettings, AdaptiveStats, Attempt,
+    check_output, check_start, classic_factor, hermite, initial_step, is_non_finite, step_loop, theta_in, workspace, AdaptiveError, AdaptiveSettings,
+    AdaptiveStats, Attempt,
 };
 
 /// γ = 2 − √2: the trapezoidal stage covers `γh`, and both stages then
@@ -120,9 +120,7 @@ impl TrBdf2 {
         let theta = theta_in(t, self.last)?;
         let h = self.last.map_or(0.0, |l| l.1);
         let n = self.q0.len();
-        if q.len() != n || v.len() != n {
-            return Err(IntegrateError::DimensionMismatch { t, what: "dense output", expected: n, got: q.len().min(v.len()) }.into());
-        }
+        check_output(t, n, q, v)?;
         // After acceptance q0, v0, a0 still hold the step's start, z1 its
         // end (q₁, v₁) and ag the end acceleration a₁.
         for i in 0..n {
