@@ -441,6 +441,29 @@ fn errors_are_typed_and_name_the_time() {
     println!("{e}");
     assert!(matches!(e, AdaptiveError::Integrate(IntegrateError::System { source: SystemError::Singular { .. }, .. })));
 
+    // A load that turns NaN at t = 1 s: every trial step across it goes
+    // non-finite, the step shrinks to nothing, and the error names the
+    // last good time, just before 1 s.
+    for name in ["DOPRI5", "TR-BDF2"] {
+        let mut poisoned = DenseSystem::oscillator(1.0, 0.0, 1.0).expect("valid").with_force(|t, f| {
+            if t > 1.0 {
+                f[0] = f64::NAN;
+            }
+        });
+        let mut state = State::new(&mut poisoned, 0.0, vec![1.0], vec![0.0]).expect("state");
+        let result = if name == "DOPRI5" {
+            DormandPrince::new(1e-6, 1e-6).expect("valid").integrate(&mut poisoned, &mut state, 2.0)
+        } else {
+            TrBdf2::new(1e-6, 1e-6).expect("valid").integrate(&mut poisoned, &mut state, 2.0)
+        };
+        let e = result.expect_err("non-finite");
+        println!("{name}, load NaN after 1 s: {e}");
+        match e {
+            AdaptiveError::NonFinite { t } => assert!(t <= 1.0 && 1.0 - t < 1e-12 && t == state.t, "{t}"),
+            other => panic!("{name}: expected a non-finite error, got {other}"),
+        }
+    }
+
     // Step underflow at the blow-up t* = √6 s.
     let t_star = 6f64.sqrt();
     for name in ["DOPRI5", "TR-BDF2"] {

@@ -164,7 +164,7 @@ impl DormandPrince {
                     self.accept(state, h_try, if last { t_end } else { t + h_try });
                     self.h = h_next;
                 }
-                Attempt::Rejected(_) => rejected = true,
+                Attempt::Rejected(_) | Attempt::NonFinite(_) => rejected = true,
             }
             Ok(attempt)
         })
@@ -202,7 +202,7 @@ impl DormandPrince {
             stats.add_work(&work);
             match result {
                 Ok(()) => {}
-                Err(e) if is_non_finite(&e) => return Ok(Attempt::Rejected(h * s.fac_min)),
+                Err(e) if is_non_finite(&e) => return Ok(Attempt::NonFinite(h * s.fac_min)),
                 Err(e) => return Err(e.into()),
             }
         }
@@ -211,7 +211,7 @@ impl DormandPrince {
         }
         let err = s.error_norm(&self.e, &self.z0, &self.z);
         if !err.is_finite() {
-            return Ok(Attempt::Rejected(h * s.fac_min));
+            return Ok(Attempt::NonFinite(h * s.fac_min));
         }
         // Hairer's PI controller: fac = err^expo1 / err_prev^β / safety,
         // limited to [1/fac_max, 1/fac_min]; h_new = h / fac.

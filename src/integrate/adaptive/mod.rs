@@ -148,10 +148,10 @@ pub enum AdaptiveError {
         /// The limit ([`AdaptiveSettings::max_steps`]).
         max_steps: usize,
     },
-    /// The starting state is NaN or infinite. (A trial step that goes
-    /// non-finite is rejected and retried smaller; if that never ends, the
-    /// integration stops with [`StepUnderflow`](Self::StepUnderflow).)
-    #[error("non-finite state at t = {t} s")]
+    /// The starting state is NaN or infinite, or every trial step from `t`
+    /// went NaN or infinite down to the smallest step `t` can resolve (a
+    /// trial step that goes non-finite is rejected and retried smaller).
+    #[error("non-finite state at t = {t} s (at the start, or in every trial step from it)")]
     NonFinite {
         /// Time of the state, s.
         t: f64,
@@ -320,10 +320,14 @@ impl AdaptiveSettings {
 
 /// What an adaptive step attempt produced.
 enum Attempt {
-    /// Accepted with scaled error `err ≤ 1`.
+    /// Accepted (scaled error `≤ 1`): the step to try next, s.
     Accepted(f64),
-    /// Rejected: the step to try next, s.
+    /// Rejected by the error test or a Newton failure: the step to try
+    /// next, s.
     Rejected(f64),
+    /// Rejected because a stage or the result went NaN or infinite: the
+    /// step to try next, s.
+    NonFinite(f64),
 }
 
 /// Checks the end time and the starting state; returns `false` when the
@@ -433,18 +437,25 @@ fn step_loop<F>(
 where
     F: FnMut(f64, bool, &mut AdaptiveStats) -> Result<Attempt, AdaptiveError>,
 {
+    let mut non_finite = false;
     loop {
         if *budget == 0 {
             return Err(AdaptiveError::TooManySteps { t: state_t, t_end, max_steps });
         }
         *budget -= 1;
-        let (h_try, last) = clip_step(max_step, state_t, t_end, *h)?;
-        match attempt(h_try, last, stats)? {
+        let (h_try, last) = match clip_step(max_step, state_t, t_end, *h) {
+            // Shrunk to nothing by trial steps that kept going non-finite.
+            Err(AdaptiveError::StepUnderflow { .. }) if non_finite => return Err(AdaptiveError::NonFinite { t: state_t }),
+            other => other?,
+        };
+        let result = attempt(h_try, last, stats)?;
+        non_finite = matches!(result, Attempt::NonFinite(_));
+        match result {
             Attempt::Accepted(_) => {
                 stats.accepted_steps += 1;
                 return Ok(());
             }
-            Attempt::Rejected(h_next) => {
+            Attempt::Rejected(h_next) | Attempt::NonFinite(h_next) => {
                 stats.rejected_steps += 1;
                 *h = h_next;
             }

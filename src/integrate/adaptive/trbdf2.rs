@@ -171,31 +171,29 @@ impl TrBdf2 {
                     state.t = if last { t_end } else { t + h_try };
                     self.h = if rejected { h_next.min(h_try) } else { h_next };
                 }
-                Attempt::Rejected(_) => rejected = true,
+                Attempt::Rejected(_) | Attempt::NonFinite(_) => rejected = true,
             }
             Ok(attempt)
         })
     }
 
     /// One Newton solve for a stage at time `t` with the bases already in
-    /// `ws.qb`, `ws.vb` and the starting guess in `ws.x`. `Ok(false)`: Newton
-    /// did not converge or the iterate went non-finite (reject the step).
-    fn stage<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, t: f64, h: f64, stats: &mut AdaptiveStats) -> Result<bool, AdaptiveError> {
+    /// `ws.qb`, `ws.vb` and the starting guess in `ws.x`. `Ok(None)`:
+    /// converged; `Ok(Some(rejection))`: Newton did not converge or the
+    /// iterate went non-finite, retry with a quarter of `h`.
+    fn stage<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, t: f64, h: f64, stats: &mut AdaptiveStats) -> Result<Option<Attempt>, AdaptiveError> {
         let c_v = D * h;
         let map = Affine { t, c_q: c_v * c_v, c_v, h };
         let mut work = StepStats::default();
         let result = newton::solve(sys, &mut self.ws, map, &self.newton, false, &mut work, (&self.q0, &self.v0));
         stats.add_work(&work);
         match result {
-            Ok(()) => Ok(true),
+            Ok(()) => Ok(None),
             Err(Failure::NotConverged { .. }) => {
                 stats.newton_failures += 1;
-                Ok(false)
+                Ok(Some(Attempt::Rejected(0.25 * h)))
             }
-            Err(Failure::Error(e)) if is_non_finite(&e) => {
-                stats.newton_failures += 1;
-                Ok(false)
-            }
+            Err(Failure::Error(e)) if is_non_finite(&e) => Ok(Some(Attempt::NonFinite(0.25 * h))),
             Err(Failure::Error(e)) => Err(e.into()),
         }
     }
@@ -209,15 +207,14 @@ impl TrBdf2 {
         self.v0.copy_from_slice(&state.v);
         self.a0.copy_from_slice(&state.a);
         let dh = D * h;
-        let shrink = Attempt::Rejected(0.25 * h);
         // Stage 1: trapezoid over γh, started from a₀.
         for i in 0..n {
             self.ws.vb[i] = self.v0[i] + dh * self.a0[i];
             self.ws.qb[i] = self.q0[i] + GAMMA * h * self.v0[i] + dh * dh * self.a0[i];
             self.ws.x[i] = self.a0[i];
         }
-        if !self.stage(sys, t + GAMMA * h, h, stats)? {
-            return Ok(shrink);
+        if let Some(rejection) = self.stage(sys, t + GAMMA * h, h, stats)? {
+            return Ok(rejection);
         }
         self.qg.copy_from_slice(&self.ws.q);
         self.vg.copy_from_slice(&self.ws.v);
@@ -229,8 +226,8 @@ impl TrBdf2 {
             self.ws.qb[i] = W_G * self.qg[i] + W_N * self.q0[i] + dh * self.ws.vb[i];
             self.ws.x[i] = self.a0[i] + (self.ag[i] - self.a0[i]) / GAMMA;
         }
-        if !self.stage(sys, t + h, h, stats)? {
-            return Ok(shrink);
+        if let Some(rejection) = self.stage(sys, t + h, h, stats)? {
+            return Ok(rejection);
         }
         for i in 0..n {
             let (q1, v1, a1) = (self.ws.q[i], self.ws.v[i], self.ws.x[i]);
@@ -244,7 +241,7 @@ impl TrBdf2 {
         }
         let err = self.settings.error_norm(&self.e, &self.z0, &self.z1);
         if !err.is_finite() || !self.z1.iter().all(|x| x.is_finite()) {
-            return Ok(Attempt::Rejected(h * self.settings.fac_min));
+            return Ok(Attempt::NonFinite(h * self.settings.fac_min));
         }
         let fac = classic_factor(&self.settings, err, 3.0);
         if err <= 1.0 {
