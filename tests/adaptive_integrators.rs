@@ -490,8 +490,9 @@ fn errors_are_typed_and_name_the_time() {
 // ------------------------------------------------------------ rope chain
 
 /// TR-BDF2 through the chain's own O(n) tangent solve: a 50 m rope (N = 20,
-/// μ = 1.6 kg/m, EA = 1.6e7 N, stiffness-proportional damping τ = 0.02 s)
-/// pinned at the top, released unstretched with a 5 t payload, settles to
+/// μ = 1.6 kg/m, EA = 1.6e7 N, stiffness-proportional damping τ = 0.02 s,
+/// the default tension-only axial law, which starts at its kink and stays
+/// taut) pinned at the top, released unstretched with a 5 t payload, settles to
 /// its static stretch. The payload bounce (ω ≈ 8 rad/s, ζ = ωτ/2 ≈ 0.08) has
 /// decayed to e^{−ζω·30 s} ≈ 5e-9 of its 0.15 m amplitude by t = 30 s; the
 /// element modes are overdamped with rates up to τ·4EA/(μL_e²) ≈ 1.3e5 s⁻¹,
@@ -505,7 +506,6 @@ fn trbdf2_steps_a_rope_chain_with_its_own_solve_to_the_static_stretch() {
         let body = LumpedBody::sphere(m, 0.5, DVec3::new(0.0, -l - 0.5, 0.0));
         let model = RopeBuilder::new(l, n, RopeSection { linear_density: mu, ea, ei: 50.0, ei2: 50.0, gj: 35.0, min_breaking_load: 0.0 }, 0.02)
             .damping(tau)
-            .tension_only(false)
             .start(RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO))))
             .end(RopeEnd::Body { body, anchor: DVec3::new(0.0, 0.5, 0.0), clamp: false })
             .build()
