@@ -395,7 +395,8 @@ fn initial_step<S: SecondOrderSystem + ?Sized>(
     if let Err(e) = result {
         return if is_non_finite(&e) { Ok(0.01 * h0) } else { Err(e.into()) };
     }
-    let df: Vec<f64> = (0..2 * n).map(|i| if i < n { ws.v[i] - state.v[i] } else { ws.x[i - n] - state.a[i - n] } / h0).collect();
+    // (f(t₁, z₁) − f(t₀, z₀)) / h0 with f = (v, a).
+    let df: Vec<f64> = (0..2 * n).map(|i| (if i < n { ws.v[i] - state.v[i] } else { ws.x[i - n] - state.a[i - n] }) / h0).collect();
     let d2 = settings.error_norm(&df, &z0, &zero);
     let dm = d1.max(d2);
     let h1 = if dm <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / dm).powf(1.0 / f64::from(error_order)) };
