@@ -13,10 +13,15 @@
 //!   for the next steps until they converge easily); explicit schemes choose
 //!   sub-steps from [`SecondOrderSystem::max_frequency`] ([`Substeps`]).
 //! * [`StepStats`] reports iterations, residuals, solves and sub-steps.
+//! * Adaptive step size with local error control: [`DormandPrince`]
+//!   (explicit 5(4), dense output) and [`TrBdf2`] (L-stable, for stiff
+//!   systems, Newton on the stage accelerations); [`AdaptiveStats`] counts
+//!   their work and rejected steps (tests in `tests/adaptive_integrators.rs`).
 //!
 //! Verified against the exact recurrences of `docs/verification-integrators.md`
 //! (tests in `tests/integrators_sdof.rs`).
 
+mod adaptive;
 mod dense;
 mod error;
 mod explicit;
@@ -29,6 +34,7 @@ mod state;
 mod system;
 mod wilson;
 
+pub use self::adaptive::{AdaptiveError, AdaptiveSettings, AdaptiveStats, DormandPrince, TrBdf2};
 pub(crate) use self::dense::gauss_solve;
 pub use self::dense::{DenseSystem, DenseSystemError, ForceFn};
 pub use self::error::IntegrateError;
