@@ -403,14 +403,17 @@ impl<C: TrolleyController> OverheadCraneLoop<C> {
         TrolleyMeasurement { time: self.state.t, position: q[0], velocity: v[0], sway: q[1], sway_rate: v[1] }
     }
 
-    /// Gives the payload a horizontal push of `impulse` N·s along the rail
-    /// (a change of the payload's velocity `impulse/m` with the trolley's
-    /// velocity unchanged), then recomputes the accelerations.
+    /// Gives the payload a horizontal push of `impulse` N·s along the rail:
+    /// the velocities jump by `Δq̇ = M(q)⁻¹ Jᵀ p`, `J` the payload's
+    /// horizontal velocity `ẋ + l θ̇ cos θ` as a row (the trolley reacts
+    /// through the rope), then the accelerations are recomputed.
     pub fn push_payload(&mut self, impulse: f64) -> Result<(), IntegrateError> {
-        let crane = &self.system.model;
-        let (m, l) = (crane.payload_mass, crane.rope_length);
-        // The payload's horizontal velocity is ẋ + l θ̇ cos θ.
-        self.state.v[1] += impulse / (m * l * self.state.q[1].cos());
+        let l = self.system.model.rope_length;
+        let m = self.system.mass_matrix(&self.state.q);
+        let jt = [impulse, impulse * l * self.state.q[1].cos()];
+        let det = m[0] * m[3] - m[1] * m[2];
+        self.state.v[0] += (m[3] * jt[0] - m[1] * jt[1]) / det;
+        self.state.v[1] += (m[0] * jt[1] - m[2] * jt[0]) / det;
         self.state.recompute_acceleration(&mut self.system)
     }
 
