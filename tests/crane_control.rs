@@ -85,7 +85,7 @@ fn input_shapers_cancel_the_residual_sway_as_the_closed_form_says() {
         println!("rope {rope} m, unshaped: residual sway {:.4}° vs closed form {:.4}° ({err:+.2e})", base.to_degrees(), closed.to_degrees());
         assert!(err.abs() < 0.03, "unshaped residual {err:e}");
         for kind in [ShaperKind::Zv, ShaperKind::Zvd] {
-            let shaper = InputShaper::new(kind, design, 0.0);
+            let shaper = InputShaper::new(kind, design, 0.0).unwrap();
             let samples = run(rope, ShapedMove { motion: mv, shaper: shaper.clone() }, 45.0, None);
             let ratio = residual_sway(&samples, end(&shaper)) / base;
             println!("  {kind:?}: residual {:.4}° = {ratio:.4} of unshaped", (ratio * base).to_degrees());
@@ -111,7 +111,7 @@ fn incremental_pid_sums_to_the_positional_pid() {
     let (p, s) = (PidGains { kp: 800.0, ki: 30.0, kd: 1500.0 }, PidGains { kp: 2000.0, ki: 5.0, kd: 4000.0 });
     let t = 0.05;
     let mv = ten_metres();
-    let mut pid = IncrementalPid::new(mv, p, s, t, 1e12);
+    let mut pid = IncrementalPid::new(mv, p, s, t, 1e12).unwrap();
     let (mut sum, mut prev) = ((0.0, 0.0), (0.0, 0.0));
     let mut worst = 0.0f64;
     for k in 0..200 {
@@ -155,7 +155,7 @@ fn schedule() -> NonlinearSchedule {
 fn placed_poles_set_the_sway_decay() {
     let (p, s) = DoubleLoopPid::place_poles(&crane(10.0), [(1.2, 0.7), (1.8, 0.7)]);
     let still = Move { target: 0.0, ..ten_metres() };
-    let mut lp = OverheadCraneLoop::new(crane(10.0), DoubleLoopPid::new(still, p, s, 1e9), 0.0, 1e6, 1e9).unwrap();
+    let mut lp = OverheadCraneLoop::new(crane(10.0), DoubleLoopPid::new(still, p, s, 1e9).unwrap(), 0.0, 1e6, 1e9).unwrap();
     lp.push_payload(50.0).unwrap();
     let mut samples = Vec::new();
     while lp.state.t < 25.0 {
@@ -195,11 +195,11 @@ fn controllers_move_ten_metres_and_reject_a_push() {
     println!("| controller | rope | travel time s | residual sway ° | peak force kN | push: largest sway °, trolley excursion m, settle s |");
     type Make = Box<dyn Fn() -> Box<dyn TrolleyController>>;
     let cases: Vec<(&str, Make)> = vec![
-        ("ZV shaper (speed drive)", Box::new(move || Box::new(ShapedMove { motion: mv, shaper: InputShaper::new(ShaperKind::Zv, design, 0.0) }))),
-        ("ZVD shaper (speed drive)", Box::new(move || Box::new(ShapedMove { motion: mv, shaper: InputShaper::new(ShaperKind::Zvd, design, 0.0) }))),
-        ("double-loop PID", Box::new(move || Box::new(DoubleLoopPid::new(mv, gains().0, gains().1, 2e4)))),
-        ("nonlinear PID", Box::new(move || Box::new(DoubleLoopPid::new(mv, gains().0, gains().1, 2e4).nonlinear(schedule())))),
-        ("incremental PID, T = 20 ms", Box::new(move || Box::new(IncrementalPid::new(mv, gains().0, gains().1, 0.02, 2e4)))),
+        ("ZV shaper (speed drive)", Box::new(move || Box::new(ShapedMove { motion: mv, shaper: InputShaper::new(ShaperKind::Zv, design, 0.0).unwrap() }))),
+        ("ZVD shaper (speed drive)", Box::new(move || Box::new(ShapedMove { motion: mv, shaper: InputShaper::new(ShaperKind::Zvd, design, 0.0).unwrap() }))),
+        ("double-loop PID", Box::new(move || Box::new(DoubleLoopPid::new(mv, gains().0, gains().1, 2e4).unwrap()))),
+        ("nonlinear PID", Box::new(move || Box::new(DoubleLoopPid::new(mv, gains().0, gains().1, 2e4).unwrap().nonlinear(schedule())))),
+        ("incremental PID, T = 20 ms", Box::new(move || Box::new(IncrementalPid::new(mv, gains().0, gains().1, 0.02, 2e4).unwrap()))),
     ];
     for (name, make) in &cases {
         for rope in [10.0, 12.0] {
@@ -221,4 +221,26 @@ fn controllers_move_ten_metres_and_reject_a_push() {
             }
         }
     }
+}
+
+/// Bad controller settings are refused by name instead of panicking, and a
+/// move with unusable limits holds the trolley still.
+#[test]
+fn bad_controller_settings_are_refused_by_name() {
+    let mv = ten_metres();
+    let g = PidGains { kp: 1.0, ki: 0.0, kd: 1.0 };
+    let e = DoubleLoopPid::new(mv, g, g, f64::NAN).unwrap_err();
+    assert!(e.to_string().contains("double-loop PID: max_force = NaN"), "{e}");
+    let e = DoubleLoopPid::new(mv, PidGains { kp: f64::INFINITY, ..g }, g, 1e4).unwrap_err();
+    assert!(e.to_string().contains("position kp = inf"), "{e}");
+    let e = IncrementalPid::new(mv, g, g, 0.0, 1e4).unwrap_err();
+    assert!(e.to_string().contains("incremental PID: sample_time = 0"), "{e}");
+    let e = InputShaper::new(ShaperKind::Zvd, 1.0, 1.0).unwrap_err();
+    assert!(e.to_string().contains("input shaper: zeta = 1"), "{e}");
+    let e = InputShaper::new(ShaperKind::Zv, -1.0, 0.0).unwrap_err();
+    assert!(e.to_string().contains("input shaper: omega = -1"), "{e}");
+    let shaper = InputShaper::new(ShaperKind::Zv, 1.0, 0.0).unwrap();
+    assert!(OverheadCraneLoop::new(crane(10.0), ShapedMove { motion: mv, shaper }, 0.0, 1e6, -5.0).is_err());
+    let still = Move { max_acceleration: f64::NAN, ..mv };
+    assert_eq!((still.duration(), still.speed(3.0), still.position(3.0)), (0.0, 0.0, 0.0));
 }

@@ -176,7 +176,7 @@ fn full_rope_crane_follows_the_reduced_model() {
     assert!((arrive - arrive_red).abs() < 2e-3, "trolley at {arrive} vs {arrive_red}");
     // ZV shaped at the reduced model's frequency.
     let omega = 2.0 * std::f64::consts::PI / pr;
-    let zv = ShapedMove { motion: mv, shaper: InputShaper::new(ShaperKind::Zv, omega, 0.0) };
+    let zv = ShapedMove { motion: mv, shaper: InputShaper::new(ShaperKind::Zv, omega, 0.0).unwrap() };
     let full_zv = full_rope(&zv, duration);
     let rz = residual(&full_zv, after + zv.shaper.duration());
     println!("ZV on the full rope: residual {:.4}° = {:.4} of unshaped", rz.to_degrees(), rz / rf);

@@ -99,7 +99,7 @@ fn trolley_control_moves_a_payload_without_sway_in_a_bevy_app() {
     );
     assert!((unshaped / expected - 1.0).abs() < 0.03, "unshaped {unshaped} vs {expected}");
 
-    let zv = ShapedMove { motion: mv, shaper: InputShaper::new(ShaperKind::Zv, (9.81 / l_eq).sqrt(), 0.0) };
+    let zv = ShapedMove { motion: mv, shaper: InputShaper::new(ShaperKind::Zv, (9.81 / l_eq).sqrt(), 0.0).unwrap() };
     let end = after + zv.shaper.duration();
     let rows = run(zv, 40.0);
     let shaped = residual(&rows, end);
@@ -109,7 +109,7 @@ fn trolley_control_moves_a_payload_without_sway_in_a_bevy_app() {
     let reduced_crane = OverheadCrane::new(500.0, m + rho * 10.0, l_eq).unwrap();
     let (mut p, s) = DoubleLoopPid::place_poles(&reduced_crane, [(1.2, 0.7), (1.8, 0.7)]);
     p.ki = 0.05 * p.kp;
-    let rows = run(DoubleLoopPid::new(mv, p, s, 2e4), 40.0);
+    let rows = run(DoubleLoopPid::new(mv, p, s, 2e4).unwrap(), 40.0);
     let (x, sway) = (rows.last().unwrap().1, residual(&rows, 30.0));
     println!("double-loop PID in a Bevy app: trolley at {x:.4} m, sway after 30 s {:.4}°", sway.to_degrees());
     assert!((x - 10.0).abs() < 0.05 && sway.to_degrees() < 0.5, "PID: x {x}, sway {sway}");

@@ -5,9 +5,9 @@
 //! a [`TrolleyCommand`]; [`OverheadCraneLoop`] closes the loop on the
 //! reduced [`OverheadCrane`].
 
-use super::{LagrangeSystem, OverheadCrane, TrolleyDrive};
+use super::{check_positive, limit, CraneError, LagrangeSystem, OverheadCrane, TrolleyDrive};
 
-use crate::integrate::{IntegrateError, Integrator, State};
+use crate::integrate::{Integrator, State};
 
 /// What a trolley controller reads at a sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -50,6 +50,8 @@ impl<T: TrolleyController + ?Sized> TrolleyController for Box<T> {
 /// A point-to-point move of the trolley: from `start` (m) at time `t0` (s)
 /// to `target` (m), with a speed limit (m/s) and an acceleration limit
 /// (m/s²): the time-optimal trapezoidal (or triangular) speed profile.
+/// Limits that are not positive and finite (or a non-finite distance or
+/// start time) give no motion: the trolley is held at `start`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Move {
     /// Start time, s.
@@ -65,12 +67,15 @@ pub struct Move {
 }
 
 impl Move {
-    /// Acceleration time, cruise time, and the signed cruise speed.
+    /// Acceleration time, cruise time, and the signed cruise speed (all 0,
+    /// no motion, when a limit is not positive and finite or the distance
+    /// is 0 or not finite).
     fn phases(&self) -> (f64, f64, f64) {
         let d = (self.target - self.start).abs();
         let (vm, am) = (self.max_speed.abs(), self.max_acceleration.abs());
         let sign = (self.target - self.start).signum();
-        if vm <= 0.0 || am <= 0.0 || d == 0.0 {
+        let usable = |x: f64| x.is_finite() && x > 0.0;
+        if !(usable(vm) && usable(am) && usable(d) && self.t0.is_finite()) {
             return (0.0, 0.0, 0.0);
         }
         let ta = vm / am;
@@ -109,7 +114,8 @@ impl Move {
         let (ta, tc, v) = self.phases();
         let s = (t - self.t0).clamp(0.0, 2.0 * ta + tc);
         if ta == 0.0 {
-            return if t >= self.t0 { self.target } else { self.start };
+            // No motion (see `phases`).
+            return self.start;
         }
         let a = v / ta;
         let x = if s < ta {
@@ -147,9 +153,14 @@ impl InputShaper {
     /// The ZV or ZVD shaper for angular frequency `omega` (rad/s) and
     /// damping ratio `zeta` (0 ≤ ζ < 1): with `K = exp(−ζπ/√(1−ζ²))` and the
     /// damped half period `T/2 = π/(ω√(1−ζ²))`, ZV is `[1, K]/(1+K)` at
-    /// `[0, T/2]` and ZVD `[1, 2K, K²]/(1+K)²` at `[0, T/2, T]`.
-    pub fn new(kind: ShaperKind, omega: f64, zeta: f64) -> Self {
-        let root = (1.0 - zeta * zeta).max(1e-12).sqrt();
+    /// `[0, T/2]` and ZVD `[1, 2K, K²]/(1+K)²` at `[0, T/2, T]`. Refused
+    /// unless ω is positive and finite and 0 ≤ ζ < 1.
+    pub fn new(kind: ShaperKind, omega: f64, zeta: f64) -> Result<Self, CraneError> {
+        check_positive("input shaper", "omega", omega)?;
+        if !(0.0..1.0).contains(&zeta) {
+            return Err(CraneError::InvalidParameter { model: "input shaper", field: "zeta", value: zeta, requirement: "in [0, 1)" });
+        }
+        let root = (1.0 - zeta * zeta).sqrt();
         let k = (-zeta * std::f64::consts::PI / root).exp();
         let half = std::f64::consts::PI / (omega * root);
         let impulses = match kind {
@@ -159,7 +170,7 @@ impl InputShaper {
                 vec![(0.0, 1.0 / s), (half, 2.0 * k / s), (2.0 * half, k * k / s)]
             }
         };
-        InputShaper { impulses }
+        Ok(InputShaper { impulses })
     }
 
     /// Total delay the shaper adds, s.
@@ -244,14 +255,37 @@ pub struct NonlinearSchedule {
     pub e_i: f64,
 }
 
+/// Checks a PID's gains and force limit.
+fn check_controller(model: &'static str, position: &PidGains, sway: &PidGains, max_force: f64) -> Result<(), CraneError> {
+    if max_force.is_nan() || max_force <= 0.0 {
+        return Err(CraneError::InvalidParameter { model, field: "max_force", value: max_force, requirement: "positive" });
+    }
+    for (field, value) in [
+        ("position kp", position.kp),
+        ("position ki", position.ki),
+        ("position kd", position.kd),
+        ("sway kp", sway.kp),
+        ("sway ki", sway.ki),
+        ("sway kd", sway.kd),
+    ] {
+        if !value.is_finite() {
+            return Err(CraneError::InvalidParameter { model, field, value, requirement: "finite" });
+        }
+    }
+    Ok(())
+}
+
 fn sech(x: f64) -> f64 {
     1.0 / x.cosh()
 }
 
 impl DoubleLoopPid {
-    /// A double-loop PID following `motion` with fixed gains.
-    pub fn new(motion: Move, position: PidGains, sway: PidGains, max_force: f64) -> Self {
-        DoubleLoopPid { motion, position, sway, max_force, schedule: None, integral: (0.0, 0.0), last_time: None }
+    /// A double-loop PID following `motion` with fixed gains. Refused
+    /// unless `max_force` is positive (N; infinite is allowed) and every
+    /// gain finite.
+    pub fn new(motion: Move, position: PidGains, sway: PidGains, max_force: f64) -> Result<Self, CraneError> {
+        check_controller("double-loop PID", &position, &sway, max_force)?;
+        Ok(DoubleLoopPid { motion, position, sway, max_force, schedule: None, integral: (0.0, 0.0), last_time: None })
     }
 
     /// The nonlinear PID: the same loops with the position gains scheduled
@@ -303,7 +337,7 @@ impl TrolleyController for DoubleLoopPid {
         let de = self.motion.speed(m.time) - m.velocity;
         let g = self.gains(e);
         let unclamped = g.kp * e + g.ki * self.integral.0 + g.kd * de + self.sway.kp * m.sway + self.sway.ki * self.integral.1 + self.sway.kd * m.sway_rate;
-        let f = unclamped.clamp(-self.max_force, self.max_force);
+        let f = limit(unclamped, self.max_force);
         // Conditional integration: no wind-up while saturated.
         if f == unclamped {
             self.integral.0 += e * dt;
@@ -337,9 +371,13 @@ pub struct IncrementalPid {
 }
 
 impl IncrementalPid {
-    /// An incremental PID sampled every `sample_time` (s).
-    pub fn new(motion: Move, position: PidGains, sway: PidGains, sample_time: f64, max_force: f64) -> Self {
-        IncrementalPid { motion, position, sway, sample_time, max_force, history: [(0.0, 0.0); 2], output: 0.0, next_sample: None }
+    /// An incremental PID sampled every `sample_time` (s). Refused unless
+    /// the sample time is positive and finite, `max_force` positive (N) and
+    /// every gain finite.
+    pub fn new(motion: Move, position: PidGains, sway: PidGains, sample_time: f64, max_force: f64) -> Result<Self, CraneError> {
+        check_controller("incremental PID", &position, &sway, max_force)?;
+        check_positive("incremental PID", "sample_time", sample_time)?;
+        Ok(IncrementalPid { motion, position, sway, sample_time, max_force, history: [(0.0, 0.0); 2], output: 0.0, next_sample: None })
     }
 }
 
@@ -354,7 +392,7 @@ impl TrolleyController for IncrementalPid {
             let [e1, e2] = self.history;
             let inc = |g: &PidGains, e: f64, e1: f64, e2: f64| g.kp * (e - e1) + g.ki * t * e + g.kd / t * (e - 2.0 * e1 + e2);
             let du = inc(&self.position, e.0, e1.0, e2.0) + inc(&self.sway, e.1, e1.1, e2.1);
-            self.output = (self.output + du).clamp(-self.max_force, self.max_force);
+            self.output = limit(self.output + du, self.max_force);
             self.history = [e, e1];
             self.next_sample = Some(self.next_sample.map_or(m.time, |s| s) + t);
         }
@@ -391,7 +429,13 @@ pub struct OverheadCraneLoop<C: TrolleyController> {
 
 impl<C: TrolleyController> OverheadCraneLoop<C> {
     /// The crane at rest at trolley position `x0` (m), hanging still.
-    pub fn new(crane: OverheadCrane, controller: C, x0: f64, speed_gain: f64, max_force: f64) -> Result<Self, IntegrateError> {
+    /// Refused unless `speed_gain` (N·s/m) and `max_force` (N) are
+    /// positive.
+    pub fn new(crane: OverheadCrane, controller: C, x0: f64, speed_gain: f64, max_force: f64) -> Result<Self, CraneError> {
+        check_positive("overhead crane loop", "speed_gain", speed_gain)?;
+        if max_force.is_nan() || max_force <= 0.0 {
+            return Err(CraneError::InvalidParameter { model: "overhead crane loop", field: "max_force", value: max_force, requirement: "positive" });
+        }
         let mut system = crane.system();
         let state = State::new(&mut system, 0.0, vec![x0, 0.0], vec![0.0, 0.0])?;
         Ok(OverheadCraneLoop { system, state, controller, speed_gain, max_force, integrator: Integrator::default() })
@@ -407,21 +451,21 @@ impl<C: TrolleyController> OverheadCraneLoop<C> {
     /// the velocities jump by `Δq̇ = M(q)⁻¹ Jᵀ p`, `J` the payload's
     /// horizontal velocity `ẋ + l θ̇ cos θ` as a row (the trolley reacts
     /// through the rope), then the accelerations are recomputed.
-    pub fn push_payload(&mut self, impulse: f64) -> Result<(), IntegrateError> {
+    pub fn push_payload(&mut self, impulse: f64) -> Result<(), CraneError> {
         let l = self.system.model.rope_length;
         let m = self.system.mass_matrix(&self.state.q);
         let jt = [impulse, impulse * l * self.state.q[1].cos()];
         let det = m[0] * m[3] - m[1] * m[2];
         self.state.v[0] += (m[3] * jt[0] - m[1] * jt[1]) / det;
         self.state.v[1] += (m[0] * jt[1] - m[2] * jt[0]) / det;
-        self.state.recompute_acceleration(&mut self.system)
+        Ok(self.state.recompute_acceleration(&mut self.system)?)
     }
 
     /// One control sample and one step of `h` seconds.
-    pub fn step(&mut self, h: f64) -> Result<LoopSample, IntegrateError> {
+    pub fn step(&mut self, h: f64) -> Result<LoopSample, CraneError> {
         let measurement = self.measurement();
         let drive = match self.controller.update(&measurement) {
-            TrolleyCommand::Force(f) => TrolleyDrive::Force(f.clamp(-self.max_force, self.max_force)),
+            TrolleyCommand::Force(f) => TrolleyDrive::Force(limit(f, self.max_force)),
             TrolleyCommand::Speed(v) => TrolleyDrive::Speed { command: v, gain: self.speed_gain, max_force: self.max_force },
         };
         self.system.model.drive = drive;

@@ -51,6 +51,19 @@ pub enum CraneError {
         /// What it must be.
         requirement: &'static str,
     },
+    /// A closed loop could not start or step (the model's integrator failed).
+    #[error(transparent)]
+    Integrate(#[from] crate::integrate::IntegrateError),
+}
+
+/// `x` limited to `±bound` (N): `|bound|` is used, a NaN bound gives 0.
+pub(crate) fn limit(x: f64, bound: f64) -> f64 {
+    let b = bound.abs();
+    if b.is_nan() {
+        0.0
+    } else {
+        x.clamp(-b, b)
+    }
 }
 
 pub(crate) fn check_positive(model: &'static str, field: &'static str, value: f64) -> Result<(), CraneError> {
@@ -82,7 +95,7 @@ impl TrolleyDrive {
     pub fn force(&self, speed: f64) -> f64 {
         match *self {
             TrolleyDrive::Force(f) => f,
-            TrolleyDrive::Speed { command, gain, max_force } => (gain * (command - speed)).clamp(-max_force.abs(), max_force.abs()),
+            TrolleyDrive::Speed { command, gain, max_force } => limit(gain * (command - speed), max_force),
         }
     }
 }

@@ -11,7 +11,7 @@
 //! // A 10 m move, ZV-shaped for a 10 m pendulum, on the trolley's rail
 //! // motor (at most 20 kN).
 //! let motion = Move { t0: 1.0, start: 0.0, target: 10.0, max_speed: 1.0, max_acceleration: 0.25 };
-//! let shaper = InputShaper::new(ShaperKind::Zv, (9.81f64 / 10.3).sqrt(), 0.0);
+//! let shaper = InputShaper::new(ShaperKind::Zv, (9.81f64 / 10.3).sqrt(), 0.0).unwrap();
 //! commands.entity(trolley).insert(TrolleyControl::new(ShapedMove { motion, shaper }, payload, Vec3::X).with_max_force(2e4));
 //! # }
 //! ```
@@ -67,7 +67,8 @@ impl TrolleyControl {
         self
     }
 
-    /// With a rail motor force limit (N) for speed commands.
+    /// With a rail motor force limit (N) for speed commands (its magnitude
+    /// is used; NaN acts as 0).
     pub fn with_max_force(mut self, max_force: f32) -> Self {
         self.max_force = max_force;
         self
@@ -116,7 +117,8 @@ pub(crate) fn trolley_control(mut commands: Commands, time: Res<Time<Fixed>>, mu
             TrolleyCommand::Speed(v) => {
                 if let Some(mut joint) = joint {
                     let raw = &mut joint.data.as_mut().raw;
-                    crate::coupling::set_velocity_drive(raw, bevy_rapier3d::rapier::dynamics::JointAxis::LinX, v, control.max_force as f64, dt.max(1e-9));
+                    let max_force = if control.max_force.is_nan() { 0.0 } else { control.max_force.abs() as f64 };
+                    crate::coupling::set_velocity_drive(raw, bevy_rapier3d::rapier::dynamics::JointAxis::LinX, v, max_force, dt.max(1e-9));
                 }
             }
         }
