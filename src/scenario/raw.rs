@@ -95,6 +95,10 @@ pub(crate) struct RawScenario {
     pub winch: Vec<S<RawWinch>>,
     #[serde(default)]
     pub probe: Vec<S<RawProbe>>,
+    /// `[[controller]]` (SCENARIO.md): read so that it can be refused by
+    /// name (not built yet).
+    #[serde(default)]
+    pub controller: Vec<S<toml::Value>>,
 }
 
 /// `[simulation]`.

@@ -244,6 +244,12 @@ pub(crate) fn list<S: AsRef<str>>(names: &[S]) -> String {
 /// Validate the whole file.
 pub(crate) fn validate(ctx: &Ctx<'_>, file: &Path, raw: RawScenario) -> Res<Scenario> {
     let simulation = simulation(ctx, &raw.simulation)?;
+    if let Some(c) = raw.controller.first() {
+        return Err(ctx.err(
+            c.span(),
+            "`[[controller]]` is not supported in scenario files yet: drive the trolley's rail with a joint `drive` (a velocity table can carry a shaped move), or use `crane::control` from Rust or `plugin::TrolleyControl` in a Bevy app (docs/control.md)",
+        ));
+    }
     let environment = match &raw.environment {
         Some(env) => environment(ctx, env.get_ref())?,
         None => Environment::default(),
