@@ -86,8 +86,10 @@ impl std::ops::Mul<f64> for Jet {
 }
 
 /// A machine of point masses in generalized coordinates (REFERENCE.md §6):
-/// the description [`LagrangeSystem`] turns into equations of motion.
-pub trait PointMassModel {
+/// the description [`LagrangeSystem`] turns into equations of motion
+/// (`Clone`: a model is data, and the explicit schemes' rate estimate
+/// works on a copy).
+pub trait PointMassModel: Clone {
     /// Number of generalized coordinates.
     fn dof(&self) -> usize;
     /// The point masses, kg (their number fixes the length of
@@ -245,6 +247,62 @@ impl<M: PointMassModel> SecondOrderSystem for LagrangeSystem<M> {
         Ok(())
     }
 
+    /// An estimate of the fastest rate of the linearised model at `q`
+    /// (rad/s or 1/s) for the explicit schemes' sub-steps: the larger of
+    /// `√(max row sum |M⁻¹K_t|)` and `max row sum |M⁻¹C_t|` (Gershgorin
+    /// bounds of the stiffness and damping rates), with the tangents taken
+    /// at rest (`q̇ = q̈ = 0`, `t = 0`: a drive's speed loop is its damping).
+    fn max_frequency(&self, q: &[f64]) -> Option<f64> {
+        let n = self.model.dof();
+        let mut sys = self.clone();
+        let zeros = vec![0.0; n];
+        let mass = sys.mass_matrix(q);
+        let mut worst = (0.0f64, 0.0f64);
+        for (which, (cq, cv)) in [(0usize, (1.0, 0.0)), (1, (0.0, 1.0))] {
+            // Columns of the tangent: (M + c_q K + c_v C) e_j − M e_j.
+            let mut tangent = vec![0.0; n * n];
+            let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
+            for c in 0..n {
+                let mut qs = q.to_vec();
+                let mut vs = zeros.clone();
+                let e = 1e-6 * (1.0 + q[c].abs());
+                if which == 0 {
+                    qs[c] += e;
+                } else {
+                    vs[c] += e;
+                }
+                sys.residual(0.0, &qs, &vs, &zeros, &mut rp).ok()?;
+                if which == 0 {
+                    qs[c] -= 2.0 * e;
+                } else {
+                    vs[c] -= 2.0 * e;
+                }
+                sys.residual(0.0, &qs, &vs, &zeros, &mut rm).ok()?;
+                for r in 0..n {
+                    tangent[r * n + c] = (rp[r] - rm[r]) / (2.0 * e) * (cq + cv);
+                }
+            }
+            // M⁻¹ times each column, then the largest absolute row sum.
+            let mut rows = vec![0.0f64; n];
+            let mut col = vec![0.0; n];
+            for c in 0..n {
+                let mut m = mass.clone();
+                let b: Vec<f64> = (0..n).map(|r| tangent[r * n + c]).collect();
+                crate::integrate::gauss_solve(n, &mut m, &b, &mut col).ok()?;
+                for r in 0..n {
+                    rows[r] += col[r].abs();
+                }
+            }
+            let g = rows.iter().fold(0.0f64, |m, x| m.max(*x));
+            if which == 0 {
+                worst.0 = g;
+            } else {
+                worst.1 = g;
+            }
+        }
+        Some(worst.0.sqrt().max(worst.1))
+    }
+
     fn solve_tangent(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         let n = self.model.dof();
         // M exactly, K_t and C_t by central differences of the residual.
@@ -282,6 +340,7 @@ mod tests {
     /// A free point mass in a plane described in polar coordinates: the
     /// generated equations are the textbook ones,
     /// `m (r̈ − r θ̇²) = F_r`, `m (r² θ̈ + 2 r ṙ θ̇) = F_θ` (no gravity).
+    #[derive(Clone)]
     struct Polar;
     impl PointMassModel for Polar {
         fn dof(&self) -> usize {

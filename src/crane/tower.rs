@@ -66,21 +66,23 @@ impl TowerCrane {
         (self.gravity * (j + (mm + m) * x * x) / (self.rope_length * (j + mm * x * x))).sqrt()
     }
 
+    /// The nonlinear equations as a system every integrator steps.
+    pub fn system(self) -> LagrangeSystem<Self> {
+        LagrangeSystem::new(self)
+    }
+}
+
+impl LagrangeSystem<TowerCrane> {
     /// Angular momentum about the tower axis (+y), kg·m²/s, at `(q, q̇)`:
     /// conserved without slewing torque and slew damping.
-    pub fn angular_momentum(&self, sys: &mut LagrangeSystem<TowerCrane>, q: &[f64], v: &[f64]) -> f64 {
-        let points = sys.points(q, v);
-        let mut h = self.jib_inertia * v[0];
-        for ((p, u), m) in points.iter().zip([self.trolley_mass, self.payload_mass]) {
+    pub fn angular_momentum(&mut self, q: &[f64], v: &[f64]) -> f64 {
+        let points = self.points(q, v);
+        let mut h = self.model.jib_inertia * v[0];
+        for ((p, u), m) in points.iter().zip([self.model.trolley_mass, self.model.payload_mass]) {
             // (p × u)·ŷ = z u_x − x u_z.
             h += m * (p[2] * u[0] - p[0] * u[2]);
         }
         h
-    }
-
-    /// The nonlinear equations as a system every integrator steps.
-    pub fn system(self) -> LagrangeSystem<Self> {
-        LagrangeSystem::new(self)
     }
 }
 
