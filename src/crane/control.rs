@@ -202,6 +202,54 @@ impl TrolleyController for ShapedMove {
     }
 }
 
+/// Input shaping of a command given live (an operator's joystick): each
+/// sample's command is remembered, and the shaped command at `t` is
+/// `Σ A_i u(t − t_i)` with `u` held between samples (zero before the
+/// first). The history kept spans the shaper's duration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OnlineShaper {
+    /// The shaper.
+    pub shaper: InputShaper,
+    history: std::collections::VecDeque<(f64, f64)>,
+}
+
+impl OnlineShaper {
+    /// Shapes live commands with `shaper`.
+    pub fn new(shaper: InputShaper) -> Self {
+        OnlineShaper { shaper, history: std::collections::VecDeque::new() }
+    }
+
+    /// Records the command `u` given at time `t` (s, non-decreasing) and
+    /// returns the shaped command at `t`.
+    pub fn shape(&mut self, t: f64, u: f64) -> f64 {
+        self.history.push_back((t, u));
+        let span = self.shaper.duration();
+        // Keep the newest sample at or before t − span (it holds there).
+        while self.history.len() > 1 && self.history[1].0 <= t - span {
+            self.history.pop_front();
+        }
+        self.shaper
+            .impulses
+            .iter()
+            .map(|&(ti, a)| {
+                let at = t - ti;
+                // The latest command given at or before `at` (ZOH).
+                let i = self.history.partition_point(|(ts, _)| *ts <= at + 1e-12);
+                if i == 0 {
+                    0.0
+                } else {
+                    a * self.history[i - 1].1
+                }
+            })
+            .sum()
+    }
+
+    /// Forgets the commands given so far.
+    pub fn reset(&mut self) {
+        self.history.clear();
+    }
+}
+
 /// Gains of one PID loop: proportional (per unit of error), integral (per
 /// unit of error·s) and derivative (per unit of error/s).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
