@@ -167,7 +167,7 @@ impl Default for GroundGrid {
 }
 
 /// A light (shadows out to `size` m), the [`Orbit`] camera, and the HUD:
-/// the `help` line and an empty [`Hud`] line below it, bottom left.
+/// the `help` line and an empty [`Hud`] line below it, top left.
 pub fn spawn_scene(commands: &mut Commands, camera: Orbit, size: f32, help: &str) {
     let size = if size.is_finite() && size > 1.0 { size } else { 1.0 };
     commands.spawn((
@@ -176,12 +176,12 @@ pub fn spawn_scene(commands: &mut Commands, camera: Orbit, size: f32, help: &str
         CascadeShadowConfigBuilder { maximum_distance: 3.0 * size, first_cascade_far_bound: 0.9 * size, ..default() }.build(),
     ));
     commands.spawn((Camera3d::default(), camera.transform(), camera));
-    let font = TextFont { font_size: FontSize::Px(17.0), ..default() };
+    let font = TextFont { font_size: FontSize::Px(16.0), ..default() };
     commands
         .spawn((
             Node {
                 position_type: PositionType::Absolute,
-                bottom: px(10),
+                top: px(10),
                 left: px(10),
                 padding: UiRect::all(px(8)),
                 flex_direction: FlexDirection::Column,

@@ -20,9 +20,9 @@
 //! exits.
 
 use crate::demo_support::{dress_bodies, exit_status, headless, spawn_scene, windowed, DemoOptions, GroundGrid, Hud, Orbit, Tint};
-use crate::plugin::render::{CableGizmos, CableRender};
+use crate::plugin::render::{CableGizmos, CableRender, CableRenderSystems};
 use crate::plugin::scenario::{add_scenario, respawn_scenario, ScenarioRun};
-use crate::plugin::{CablePlugin, CableState, CableSystems};
+use crate::plugin::{CableDescriptor, CablePlugin, CableState, CableSystems};
 use crate::scenario::{self, Scenario};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
@@ -63,7 +63,12 @@ pub fn run(scenario: Scenario, mut options: DemoOptions) -> u8 {
                 })
                 .add_systems(Update, (controls, reset.run_if(reset_asked), (pause_at_end, hud).chain()))
                 // The tint is inserted by commands applied before `dress_bodies` runs.
-                .add_systems(Update, tint_bodies.before(dress_bodies));
+                .add_systems(Update, tint_bodies.before(dress_bodies))
+                .add_systems(
+                    Update,
+                    (move |commands: Commands, new: Query<(Entity, &CableDescriptor), Without<CableRender>>| thicken(commands, new, framing.distance))
+                        .before(CableRenderSystems::Interpolate),
+                );
         }
     }
     app.add_plugins((RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default()));
@@ -73,6 +78,15 @@ pub fn run(scenario: Scenario, mut options: DemoOptions) -> u8 {
     }
     let exit = app.run();
     exit_status(&exit)
+}
+
+/// New cables are drawn at least 1/400 of the camera distance thick (a
+/// 20 mm rope seen from 50 m is under a pixel).
+fn thicken(mut commands: Commands, new: Query<(Entity, &CableDescriptor), Without<CableRender>>, distance: f32) {
+    for (e, d) in &new {
+        let radius = (0.5 * d.material.diameter() as f32).max(distance / 800.0);
+        commands.entity(e).insert(CableRender { radius: Some(radius), ..default() });
+    }
 }
 
 /// New bodies of the scenario get a colour (the file's bodies in turn).
@@ -114,7 +128,8 @@ impl Framing {
         // A 45° vertical field of view: the box fills about 70 % of it.
         let distance = 1.7 * size;
         let ground_y = if lo.y >= 0.0 { 0.0 } else { lo.y - 0.1 * size };
-        let spacing = 10f32.powf((size / 10.0).log10().round()).max(0.5);
+        // The grid: about 10 cells of 0.5, 1, 2, 5, 10, 20 or 50 m over the scene.
+        let spacing = [0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0f32].into_iter().find(|s| *s >= size / 10.0).unwrap_or(50.0);
         let cells = ((2.0 * size / spacing).ceil() as u32).clamp(4, 60);
         Framing { focus, distance, ground: Vec3::new(focus.x, ground_y, focus.z), cells, spacing }
     }
