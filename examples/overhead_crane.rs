@@ -260,7 +260,7 @@ fn headless_report(
 
 /// Light, camera, help line and HUD.
 fn setup_scene(mut commands: Commands, mut grid: ResMut<GroundGrid>) {
-    grid.cells = 24;
+    grid.cells = 20;
     let camera = Orbit { focus: Vec3::new(0.0, 6.5, 0.0), yaw: 0.35, pitch: -0.12, distance: 27.0, keys: false };
     spawn_scene(
         &mut commands,

@@ -285,8 +285,8 @@ fn headless_report(
 
 /// Light, camera, help line and HUD.
 fn setup_scene(mut commands: Commands, mut grid: ResMut<GroundGrid>) {
-    grid.cells = 100;
-    let camera = Orbit { focus: Vec3::new(-4.0, 1.0, 0.0), yaw: 0.9, pitch: -0.3, distance: 18.0, keys: false };
+    grid.cells = 50;
+    let camera = Orbit { focus: Vec3::new(-4.0, 1.0, 0.0), yaw: 0.45, pitch: -0.22, distance: 20.0, keys: false };
     spawn_scene(&mut commands, camera, 30.0, "up/W: throttle   down/S: brake   left/right or A/D: steer   drag: orbit   wheel: zoom   R: reset");
 }
 

@@ -124,9 +124,11 @@ impl Framing {
             (lo, hi) = (Vec3::splat(-1.0), Vec3::splat(1.0));
         }
         let size = (hi - lo).max_element().max(2.0);
-        let focus = 0.5 * (lo + hi);
-        // A 45° vertical field of view: the box fills about 70 % of it.
-        let distance = 1.7 * size;
+        // Looking a little above the middle, so that the scene sits below
+        // the HUD (top left).
+        let focus = 0.5 * (lo + hi) + Vec3::Y * 0.12 * size;
+        // A 45° vertical field of view: the box fills about 60 % of it.
+        let distance = 2.0 * size;
         let ground_y = if lo.y >= 0.0 { 0.0 } else { lo.y - 0.1 * size };
         // The grid: about 10 cells of 0.5, 1, 2, 5, 10, 20 or 50 m over the scene.
         let spacing = [0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0f32].into_iter().find(|s| *s >= size / 10.0).unwrap_or(50.0);
