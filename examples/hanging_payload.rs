@@ -24,7 +24,7 @@ use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier_cable::cable::RopeMaterial;
 use bevy_rapier_cable::demo_support::*;
-use bevy_rapier_cable::plugin::render::{CableGizmos, CableRender};
+use bevy_rapier_cable::plugin::render::CableRender;
 use bevy_rapier_cable::plugin::*;
 
 /// Rope anchor under the beam, m.
@@ -42,26 +42,16 @@ const USAGE: &str = "usage: hanging_payload [--headless FRAMES] [--screenshot FI
 
 fn main() {
     let options = DemoOptions::from_args_or_exit(USAGE);
-    let mut app = App::new();
-    match options.headless {
-        Some(_) => {
-            headless(&mut app);
-            app.add_systems(FixedUpdate, headless_report.after(CableSystems::Readout));
-        }
-        None => {
-            windowed(&mut app, "bevy_rapier_cable: hanging payload", &options);
-            app.init_resource::<Kick>().add_systems(Startup, setup_scene).add_systems(Update, (keys, hud));
-        }
+    let mut app = demo_app("bevy_rapier_cable: hanging payload", &options);
+    if options.headless.is_some() {
+        app.add_systems(FixedUpdate, headless_report.after(CableSystems::Readout));
+    } else {
+        app.init_resource::<Kick>().add_systems(Startup, setup_scene).add_systems(Update, (kick_key, reset_rig(spawn_rig), look_keys(RED_AT), hud));
     }
-    let exit = app
-        .add_plugins((RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default()))
-        .insert_resource(Time::<Fixed>::from_hz(60.0))
-        .insert_resource(TimestepMode::Fixed { dt: 1.0 / 60.0, substeps: 1 })
-        .insert_resource(options)
+    app.add_plugins((RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default()))
         .add_systems(Startup, (setup_gantry, spawn_rig))
-        .add_systems(FixedUpdate, push.before(CableSystems::Init))
-        .run();
-    std::process::exit(exit_status(&exit).into());
+        .add_systems(FixedUpdate, push.before(CableSystems::Init));
+    run_and_exit(app);
 }
 
 /// The crate.
@@ -71,10 +61,6 @@ struct Payload;
 /// The crate's rope.
 #[derive(Component)]
 struct Rope;
-
-/// What R despawns.
-#[derive(Component)]
-struct Rig;
 
 /// A kick asked for in `Update` (space), given at the next fixed step.
 #[derive(Resource, Default)]
@@ -206,32 +192,10 @@ fn setup_scene(mut commands: Commands) {
     spawn_scene(&mut commands, camera, 20.0, "drag: orbit   wheel: zoom   arrows/WASD: push   space: kick   R: reset   T: tension colours   G: gizmos");
 }
 
-/// Space kicks, R resets, T and G toggle the looks.
-fn keys(
-    mut commands: Commands,
-    keys: Res<ButtonInput<KeyCode>>,
-    mut kick: ResMut<Kick>,
-    rig: Query<Entity, With<Rig>>,
-    mut looks: Query<&mut CableRender>,
-    mut gizmos: ResMut<GizmoConfigStore>,
-) {
+/// Space kicks (R, T and G: [`reset_rig`], [`look_keys`]).
+fn kick_key(keys: Res<ButtonInput<KeyCode>>, mut kick: ResMut<Kick>) {
     if keys.just_pressed(KeyCode::Space) {
         kick.0 = true;
-    }
-    if keys.just_pressed(KeyCode::KeyR) {
-        for e in &rig {
-            commands.entity(e).despawn();
-        }
-        commands.run_system_cached(spawn_rig);
-    }
-    if keys.just_pressed(KeyCode::KeyT) {
-        for mut look in &mut looks {
-            look.color_by_tension = if look.color_by_tension.is_some() { None } else { Some(RED_AT) };
-        }
-    }
-    if keys.just_pressed(KeyCode::KeyG) {
-        let (config, _) = gizmos.config_mut::<CableGizmos>();
-        config.enabled = !config.enabled;
     }
 }
 

@@ -56,26 +56,16 @@ const USAGE: &str = "usage: overhead_crane [--headless FRAMES] [--screenshot FIL
 fn main() {
     let mut options = DemoOptions::from_args_or_exit(USAGE);
     options.screenshot_after = 3.0;
-    let mut app = App::new();
-    match options.headless {
-        Some(_) => {
-            headless(&mut app);
-            app.add_systems(FixedUpdate, headless_report.after(CableSystems::Readout));
-        }
-        None => {
-            windowed(&mut app, "bevy_rapier_cable: overhead crane", &options);
-            app.add_systems(Startup, setup_scene).add_systems(Update, (keys, hud));
-        }
+    let mut app = demo_app("bevy_rapier_cable: overhead crane", &options);
+    if options.headless.is_some() {
+        app.add_systems(FixedUpdate, headless_report.after(CableSystems::Readout));
+    } else {
+        app.add_systems(Startup, setup_scene).add_systems(Update, (reset_rig(spawn_rig), hud));
     }
-    let exit = app
-        .add_plugins((RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default()))
-        .insert_resource(Time::<Fixed>::from_hz(60.0))
-        .insert_resource(TimestepMode::Fixed { dt: 1.0 / 60.0, substeps: 1 })
-        .insert_resource(options)
+    app.add_plugins((RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default()))
         .add_systems(Startup, (setup_crane, spawn_rig).chain())
-        .add_systems(FixedUpdate, drive.before(CableSystems::Init))
-        .run();
-    std::process::exit(exit_status(&exit).into());
+        .add_systems(FixedUpdate, drive.before(CableSystems::Init));
+    run_and_exit(app);
 }
 
 /// The girder the trolley's rail is fixed to.
@@ -93,10 +83,6 @@ struct Payload;
 /// The crate's rope.
 #[derive(Component)]
 struct Rope;
-
-/// What R despawns.
-#[derive(Component)]
-struct Rig;
 
 /// The bridge girder on two end frames, and the ground.
 fn setup_crane(mut commands: Commands) {
@@ -268,16 +254,6 @@ fn setup_scene(mut commands: Commands, mut grid: ResMut<GroundGrid>) {
         25.0,
         "left/right or A/D: drive the trolley   drag: orbit   wheel: zoom   R: reset   (no hoist: the plugin has no winch yet)",
     );
-}
-
-/// R resets.
-fn keys(mut commands: Commands, keys: Res<ButtonInput<KeyCode>>, rig: Query<Entity, With<Rig>>) {
-    if keys.just_pressed(KeyCode::KeyR) {
-        for e in &rig {
-            commands.entity(e).despawn();
-        }
-        commands.run_system_cached(spawn_rig);
-    }
 }
 
 /// Time, sway, tension, trolley speed.

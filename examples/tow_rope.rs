@@ -73,26 +73,16 @@ const USAGE: &str = "usage: tow_rope [--headless FRAMES] [--screenshot FILE.png]
 fn main() {
     let mut options = DemoOptions::from_args_or_exit(USAGE);
     options.screenshot_after = 2.5;
-    let mut app = App::new();
-    match options.headless {
-        Some(_) => {
-            headless(&mut app);
-            app.add_systems(FixedUpdate, headless_report.after(CableSubsteps));
-        }
-        None => {
-            windowed(&mut app, "bevy_rapier_cable: tow rope", &options);
-            app.add_systems(Startup, setup_scene).add_systems(Update, (keys, hud, follow_camera));
-        }
+    let mut app = demo_app("bevy_rapier_cable: tow rope", &options);
+    if options.headless.is_some() {
+        app.add_systems(FixedUpdate, headless_report.after(CableSubsteps));
+    } else {
+        app.add_systems(Startup, setup_scene).add_systems(Update, (reset_rig(spawn_rig), hud, follow_camera));
     }
-    let exit = app
-        .add_plugins((RapierPhysicsPlugin::<NoUserData>::default().in_schedule(CableSubstep), CablePlugin::default().with_coupled_substeps(SUBSTEPS)))
-        .insert_resource(Time::<Fixed>::from_hz(60.0))
-        .insert_resource(TimestepMode::Fixed { dt: 1.0 / 60.0, substeps: 1 })
-        .insert_resource(options)
+    app.add_plugins((RapierPhysicsPlugin::<NoUserData>::default().in_schedule(CableSubstep), CablePlugin::default().with_coupled_substeps(SUBSTEPS)))
         .add_systems(Startup, (setup_ground, spawn_rig))
-        .add_systems(FixedUpdate, (drive, trailer_grip).before(CableSubsteps))
-        .run();
-    std::process::exit(exit_status(&exit).into());
+        .add_systems(FixedUpdate, (drive, trailer_grip).before(CableSubsteps));
+    run_and_exit(app);
 }
 
 /// The truck (driven) and its commanded speed, m/s.
@@ -108,10 +98,6 @@ struct Trailer;
 /// The tow rope.
 #[derive(Component)]
 struct Rope;
-
-/// What R despawns.
-#[derive(Component)]
-struct Rig;
 
 /// A 200 m × 200 m ground.
 fn setup_ground(mut commands: Commands) {
@@ -295,16 +281,6 @@ fn follow_camera(rope: Query<&CableState, With<Rope>>, mut camera: Query<&mut Or
     let (Ok(state), Ok(mut orbit)) = (rope.single(), camera.single_mut()) else { return };
     if let Some(mid) = state.nodes.get(state.nodes.len() / 2) {
         orbit.focus = Vec3::new(mid.x, 1.0, mid.z);
-    }
-}
-
-/// R resets.
-fn keys(mut commands: Commands, keys: Res<ButtonInput<KeyCode>>, rig: Query<Entity, With<Rig>>) {
-    if keys.just_pressed(KeyCode::KeyR) {
-        for e in &rig {
-            commands.entity(e).despawn();
-        }
-        commands.run_system_cached(spawn_rig);
     }
 }
 

@@ -19,7 +19,7 @@
 //! }
 //! ```
 
-use crate::plugin::render::CableRenderPlugin;
+use crate::plugin::render::{CableGizmos, CableRender, CableRenderPlugin};
 use bevy::app::ScheduleRunnerPlugin;
 use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll, MouseScrollUnit};
 use bevy::light::CascadeShadowConfigBuilder;
@@ -76,6 +76,64 @@ impl DemoOptions {
                 eprintln!("{usage}");
                 std::process::exit(2);
             }
+        }
+    }
+}
+
+/// A demo's app at 60 fixed steps per second (`Time<Fixed>` and rapier's
+/// `TimestepMode`): [`headless`] with `--headless`, else [`windowed`]
+/// titled `title`; with the [`DemoOptions`] resource. Add the physics
+/// plugins and the demo's systems, then [`run_and_exit`].
+pub fn demo_app(title: &str, options: &DemoOptions) -> App {
+    let mut app = App::new();
+    if options.headless.is_some() {
+        headless(&mut app);
+    } else {
+        windowed(&mut app, title, options);
+    }
+    app.insert_resource(Time::<Fixed>::from_hz(60.0)).insert_resource(TimestepMode::Fixed { dt: 1.0 / 60.0, substeps: 1 }).insert_resource(options.clone());
+    app
+}
+
+/// Runs the app and exits the process with its status ([`exit_status`]).
+pub fn run_and_exit(mut app: App) -> ! {
+    let exit = app.run();
+    std::process::exit(exit_status(&exit).into())
+}
+
+/// What a demo's reset (R, [`reset_rig`]) despawns: its moving bodies and
+/// ropes.
+#[derive(Component, Debug, Clone, Copy, Default)]
+pub struct Rig;
+
+/// A system: R despawns every [`Rig`] entity and runs `spawn` (a system
+/// that spawns them again).
+pub fn reset_rig<M: 'static, S>(spawn: S) -> impl FnMut(Commands, Res<ButtonInput<KeyCode>>, Query<Entity, With<Rig>>)
+where
+    S: IntoSystem<(), (), M> + Copy + Send + Sync + 'static,
+{
+    move |mut commands: Commands, keys: Res<ButtonInput<KeyCode>>, rig: Query<Entity, With<Rig>>| {
+        if keys.just_pressed(KeyCode::KeyR) {
+            for e in &rig {
+                commands.entity(e).despawn();
+            }
+            commands.run_system_cached(spawn);
+        }
+    }
+}
+
+/// A system: T switches the ropes' tension colours (red at `red_at` N)
+/// on and off, G the node gizmos ([`CableGizmos`]).
+pub fn look_keys(red_at: f32) -> impl FnMut(Res<ButtonInput<KeyCode>>, Query<&mut CableRender>, ResMut<GizmoConfigStore>) {
+    move |keys: Res<ButtonInput<KeyCode>>, mut looks: Query<&mut CableRender>, mut gizmos: ResMut<GizmoConfigStore>| {
+        if keys.just_pressed(KeyCode::KeyT) {
+            for mut look in &mut looks {
+                look.color_by_tension = if look.color_by_tension.is_some() { None } else { Some(red_at) };
+            }
+        }
+        if keys.just_pressed(KeyCode::KeyG) {
+            let (config, _) = gizmos.config_mut::<CableGizmos>();
+            config.enabled = !config.enabled;
         }
     }
 }

@@ -19,8 +19,8 @@
 //! `--screenshot PATH` saves the window after 1.5 s of simulated time and
 //! exits.
 
-use crate::demo_support::{dress_bodies, exit_status, headless, spawn_scene, windowed, DemoOptions, GroundGrid, Hud, Orbit, Tint};
-use crate::plugin::render::{CableGizmos, CableRender, CableRenderSystems};
+use crate::demo_support::{dress_bodies, exit_status, headless, look_keys, spawn_scene, windowed, DemoOptions, GroundGrid, Hud, Orbit, Tint};
+use crate::plugin::render::{CableRender, CableRenderSystems};
 use crate::plugin::scenario::{add_scenario, respawn_scenario, ScenarioRun};
 use crate::plugin::{CableDescriptor, CablePlugin, CableState, CableSystems};
 use crate::scenario::{self, Scenario};
@@ -61,7 +61,7 @@ pub fn run(scenario: Scenario, mut options: DemoOptions) -> u8 {
                     let camera = Orbit { focus: framing.focus, yaw: 0.5, pitch: -0.25, distance: framing.distance, keys: true };
                     spawn_scene(&mut commands, camera, framing.distance, HELP);
                 })
-                .add_systems(Update, (controls, reset.run_if(reset_asked), (pause_at_end, hud).chain()))
+                .add_systems(Update, (controls, look_keys(RED_AT), reset.run_if(reset_asked), (pause_at_end, hud).chain()))
                 // The tint is inserted by commands applied before `dress_bodies` runs.
                 .add_systems(Update, tint_bodies.before(dress_bodies))
                 .add_systems(
@@ -158,15 +158,13 @@ fn reset_asked(status: Res<Status>) -> bool {
     status.reset
 }
 
-/// Space, N, +/-, R, T, G.
+/// Space, N, +/-, R (T and G: [`look_keys`]).
 fn controls(
     keys: Res<ButtonInput<KeyCode>>,
     mut virt: ResMut<Time<Virtual>>,
     mut fixed: ResMut<Time<Fixed>>,
     run: Res<ScenarioRun>,
     mut status: ResMut<Status>,
-    mut looks: Query<&mut CableRender>,
-    mut gizmos: ResMut<GizmoConfigStore>,
 ) {
     if keys.just_pressed(KeyCode::Space) {
         if virt.is_paused() {
@@ -189,15 +187,6 @@ fn controls(
     }
     if keys.just_pressed(KeyCode::KeyR) {
         status.reset = true;
-    }
-    if keys.just_pressed(KeyCode::KeyT) {
-        for mut look in &mut looks {
-            look.color_by_tension = if look.color_by_tension.is_some() { None } else { Some(RED_AT) };
-        }
-    }
-    if keys.just_pressed(KeyCode::KeyG) {
-        let (config, _) = gizmos.config_mut::<CableGizmos>();
-        config.enabled = !config.enabled;
     }
 }
 
