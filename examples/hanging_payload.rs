@@ -158,31 +158,13 @@ fn readings(state: &CableState) -> (f32, f32) {
 }
 
 /// `--headless N`: one line after N fixed steps, then exit.
-fn headless_report(
-    options: Res<DemoOptions>,
-    mut steps: Local<u64>,
-    rope: Query<&CableState, With<Rope>>,
-    mut errors: MessageReader<CableError>,
-    mut exit: MessageWriter<AppExit>,
-) {
-    for e in errors.read() {
-        eprintln!("{e}");
-        exit.write(AppExit::from_code(3));
-    }
-    *steps += 1;
-    if *steps < options.headless.unwrap_or(0) {
-        return;
-    }
-    match rope.single() {
-        Ok(state) => {
+fn headless_report(mut report: HeadlessReport, rope: Query<&CableState, With<Rope>>) {
+    if report.due() {
+        let line = rope.single().ok().map(|state| {
             let (top, sway) = readings(state);
-            println!("hanging_payload: t = {:.2} s, top tension = {:.3} kN, sway = {:.2} deg", state.time, top / 1000.0, sway);
-            exit.write(AppExit::Success);
-        }
-        Err(_) => {
-            eprintln!("hanging_payload: no rope state after {} steps", *steps);
-            exit.write(AppExit::from_code(1));
-        }
+            format!("t = {:.2} s, top tension = {:.3} kN, sway = {:.2} deg", state.time, top / 1000.0, sway)
+        });
+        report.finish("hanging_payload", line);
     }
 }
 

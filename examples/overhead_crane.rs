@@ -208,40 +208,29 @@ fn readings(trolley: (&Transform, &Velocity), payload: &Transform, rope: &CableS
 
 /// `--headless N`: one line after N fixed steps, then exit.
 fn headless_report(
-    options: Res<DemoOptions>,
-    mut steps: Local<u64>,
+    mut report: HeadlessReport,
     trolley: Query<(&Transform, &Velocity), With<Trolley>>,
     payload: Query<&Transform, With<Payload>>,
     rope: Query<&CableState, With<Rope>>,
-    mut errors: MessageReader<CableError>,
-    mut exit: MessageWriter<AppExit>,
 ) {
-    for e in errors.read() {
-        eprintln!("{e}");
-        exit.write(AppExit::from_code(3));
-    }
-    *steps += 1;
-    if *steps < options.headless.unwrap_or(0) {
+    if !report.due() {
         return;
     }
-    match (trolley.single(), payload.single(), rope.single()) {
+    let line = match (trolley.single(), payload.single(), rope.single()) {
         (Ok(t), Ok(p), Ok(state)) => {
             let (sway, tension, speed) = readings(t, p, state);
-            println!(
-                "overhead_crane: t = {:.2} s, trolley x = {:.3} m, speed = {:.3} m/s, sway = {:.2} deg, top tension = {:.3} kN",
+            Some(format!(
+                "t = {:.2} s, trolley x = {:.3} m, speed = {:.3} m/s, sway = {:.2} deg, top tension = {:.3} kN",
                 state.time,
                 t.0.translation.x,
                 speed,
                 sway,
                 tension / 1000.0
-            );
-            exit.write(AppExit::Success);
+            ))
         }
-        _ => {
-            eprintln!("overhead_crane: no rope state after {} steps", *steps);
-            exit.write(AppExit::from_code(1));
-        }
-    }
+        _ => None,
+    };
+    report.finish("overhead_crane", line);
 }
 
 /// Light, camera, help line and HUD.

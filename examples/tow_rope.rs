@@ -230,27 +230,19 @@ fn tension(state: &CableState) -> f32 {
 
 /// `--headless N`: one line after N fixed steps, then exit.
 fn headless_report(
-    options: Res<DemoOptions>,
-    mut steps: Local<u64>,
+    mut report: HeadlessReport,
     truck: Query<(&Transform, &Velocity), With<Truck>>,
     trailer: Query<(&Transform, &Velocity), With<Trailer>>,
     rope: Query<&CableState, With<Rope>>,
-    mut errors: MessageReader<CableError>,
-    mut exit: MessageWriter<AppExit>,
 ) {
-    for e in errors.read() {
-        eprintln!("{e}");
-        exit.write(AppExit::from_code(3));
-    }
-    *steps += 1;
-    if *steps < options.headless.unwrap_or(0) {
+    if !report.due() {
         return;
     }
-    match (truck.single(), trailer.single(), rope.single()) {
+    let line = match (truck.single(), trailer.single(), rope.single()) {
         (Ok(a), Ok(b), Ok(state)) => {
             let gap = (a.0.translation - b.0.translation).length() - TRUCK.x - TRAILER.x;
-            println!(
-                "tow_rope: t = {:.2} s, truck = {:.3} m/s, trailer = {:.3} m/s, gap = {:.3} m, tension = {:.3} kN, lowest rope point = {:.3} m, hitches at {:.3} m and {:.3} m",
+            Some(format!(
+                "t = {:.2} s, truck = {:.3} m/s, trailer = {:.3} m/s, gap = {:.3} m, tension = {:.3} kN, lowest rope point = {:.3} m, hitches at {:.3} m and {:.3} m",
                 state.time,
                 speed(a.0, a.1),
                 speed(b.0, b.1),
@@ -259,14 +251,11 @@ fn headless_report(
                 state.nodes.iter().map(|p| p.y).fold(f32::INFINITY, f32::min),
                 state.nodes.first().map_or(f32::NAN, |p| p.y),
                 state.nodes.last().map_or(f32::NAN, |p| p.y)
-            );
-            exit.write(AppExit::Success);
+            ))
         }
-        _ => {
-            eprintln!("tow_rope: no rope state after {} steps", *steps);
-            exit.write(AppExit::from_code(1));
-        }
-    }
+        _ => None,
+    };
+    report.finish("tow_rope", line);
 }
 
 /// Light, camera, help line and HUD.

@@ -20,7 +20,9 @@
 //! ```
 
 use crate::plugin::render::{CableGizmos, CableRender, CableRenderPlugin};
+use crate::plugin::CableError;
 use bevy::app::ScheduleRunnerPlugin;
+use bevy::ecs::system::SystemParam;
 use bevy::input::mouse::{AccumulatedMouseMotion, AccumulatedMouseScroll, MouseScrollUnit};
 use bevy::light::CascadeShadowConfigBuilder;
 use bevy::prelude::*;
@@ -134,6 +136,45 @@ pub fn look_keys(red_at: f32) -> impl FnMut(Res<ButtonInput<KeyCode>>, Query<&mu
         if keys.just_pressed(KeyCode::KeyG) {
             let (config, _) = gizmos.config_mut::<CableGizmos>();
             config.enabled = !config.enabled;
+        }
+    }
+}
+
+/// What a demo's `--headless N` report system needs: put it in a system
+/// after the cables' readout, call [`HeadlessReport::due`] every fixed
+/// step and [`HeadlessReport::finish`] once it is due.
+#[derive(SystemParam)]
+pub struct HeadlessReport<'w, 's> {
+    options: Res<'w, DemoOptions>,
+    steps: Local<'s, u64>,
+    errors: MessageReader<'w, 's, CableError>,
+    exit: MessageWriter<'w, AppExit>,
+}
+
+impl HeadlessReport<'_, '_> {
+    /// Counts a fixed step and forwards the cables' errors (printed, exit
+    /// status 3); `true` once N steps have run.
+    pub fn due(&mut self) -> bool {
+        for e in self.errors.read() {
+            eprintln!("{e}");
+            self.exit.write(AppExit::from_code(3));
+        }
+        *self.steps += 1;
+        *self.steps >= self.options.headless.unwrap_or(0)
+    }
+
+    /// Prints the report `line` and exits with status 0; `None` (nothing
+    /// to report: the rope is not there) prints why and exits with 1.
+    pub fn finish(&mut self, demo: &str, line: Option<String>) {
+        match line {
+            Some(line) => {
+                println!("{demo}: {line}");
+                self.exit.write(AppExit::Success);
+            }
+            None => {
+                eprintln!("{demo}: no rope state after {} steps", *self.steps);
+                self.exit.write(AppExit::from_code(1));
+            }
         }
     }
 }

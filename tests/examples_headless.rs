@@ -50,16 +50,8 @@ fn trolley_crane_runs_headless() {
 #[cfg(feature = "demo")]
 #[test]
 fn hanging_payload_runs_headless() {
-    let out = Command::new(example("hanging_payload")).args(["--headless", "120"]).output().expect("example built by cargo test");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    println!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success());
-    let line = stdout.lines().find(|l| l.starts_with("hanging_payload: t = 2.00 s")).unwrap_or_else(|| panic!("no report line: {stdout}"));
-    let value = |key: &str| -> f64 {
-        let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];
-        rest.split_whitespace().next().and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("{key} in {line}"))
-    };
-    let (tension, sway) = (value("top tension = "), value("sway = "));
+    let line = &report_line("hanging_payload", "120", "hanging_payload: t = 2.00 s");
+    let (tension, sway) = (value_after(line, "top tension = "), value_after(line, "sway = "));
     assert!((9.5..10.5).contains(&tension), "top tension {tension} kN");
     assert!((3.0..8.0).contains(&sway), "sway {sway}°");
 }
@@ -70,6 +62,17 @@ fn hanging_payload_refuses_bad_arguments() {
     let out = Command::new(example("hanging_payload")).args(["--headless", "many"]).output().expect("example built");
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("usage"));
+}
+
+/// Runs a demo with `--headless FRAMES`: it succeeds, and prints a line
+/// starting with `prefix` (returned).
+#[cfg(feature = "demo")]
+fn report_line(name: &str, frames: &str, prefix: &str) -> String {
+    let out = Command::new(example(name)).args(["--headless", frames]).output().expect("example built by cargo test");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    println!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success());
+    stdout.lines().find(|l| l.starts_with(prefix)).unwrap_or_else(|| panic!("no report line: {stdout}")).to_string()
 }
 
 /// The number after `key` in `line`.
@@ -87,11 +90,7 @@ fn value_after(line: &str, key: &str) -> f64 {
 #[cfg(feature = "demo")]
 #[test]
 fn overhead_crane_runs_headless() {
-    let out = Command::new(example("overhead_crane")).args(["--headless", "180"]).output().expect("example built by cargo test");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    println!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success());
-    let line = stdout.lines().find(|l| l.starts_with("overhead_crane: t = 3.00 s")).unwrap_or_else(|| panic!("no report line: {stdout}"));
+    let line = &report_line("overhead_crane", "180", "overhead_crane: t = 3.00 s");
     let (x, speed, sway, tension) =
         (value_after(line, "trolley x = "), value_after(line, "speed = "), value_after(line, "sway = "), value_after(line, "top tension = "));
     assert!((2.7..3.1).contains(&x), "trolley at {x} m");
@@ -107,11 +106,7 @@ fn overhead_crane_runs_headless() {
 #[cfg(feature = "demo")]
 #[test]
 fn tow_rope_runs_headless() {
-    let out = Command::new(example("tow_rope")).args(["--headless", "240"]).output().expect("example built by cargo test");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    println!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success());
-    let line = stdout.lines().find(|l| l.starts_with("tow_rope: t = 4.00 s")).unwrap_or_else(|| panic!("no report line: {stdout}"));
+    let line = &report_line("tow_rope", "240", "tow_rope: t = 4.00 s");
     let (truck, trailer, gap, lowest) =
         (value_after(line, "truck = "), value_after(line, "trailer = "), value_after(line, "gap = "), value_after(line, "lowest rope point = "));
     assert!((3.4..4.0).contains(&truck), "truck {truck} m/s");
