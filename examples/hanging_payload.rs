@@ -170,7 +170,7 @@ fn headless_report(mut report: HeadlessReport, rope: Query<&CableState, With<Rop
 
 /// Light, camera, help line and HUD.
 fn setup_scene(mut commands: Commands) {
-    let camera = Orbit { focus: Vec3::new(0.0, 6.0, 0.0), yaw: 0.6, pitch: -0.14, distance: 19.0, keys: false };
+    let camera = Orbit { focus: Vec3::new(0.0, 7.3, 0.0), yaw: 0.6, pitch: -0.14, distance: 21.0, keys: false };
     spawn_scene(&mut commands, camera, 20.0, "drag: orbit   wheel: zoom   arrows/WASD: push   space: kick   R: reset   T: tension colours   G: gizmos");
 }
 

@@ -409,11 +409,25 @@ fn ground_grid(mut gizmos: Gizmos, grid: Res<GroundGrid>) {
     gizmos.grid(on_ground, UVec2::splat(grid.cells), Vec2::splat(grid.spacing), Color::srgba(0.1, 0.1, 0.1, 0.6));
 }
 
-/// `--screenshot PATH`: a screenshot once [`DemoOptions::screenshot_after`]
-/// s have passed, then exit.
-fn screenshot(mut commands: Commands, time: Res<Time>, options: Res<DemoOptions>, mut taken: Local<bool>) {
+/// Frames rendered with the simulation paused before a `--screenshot`
+/// run starts: the first frames of a software renderer come out black
+/// while the pipelines compile.
+const WARM_UP_FRAMES: u32 = 20;
+
+/// `--screenshot PATH`: the simulation held for [`WARM_UP_FRAMES`], then
+/// a screenshot once [`DemoOptions::screenshot_after`] s have passed, then
+/// exit.
+fn screenshot(mut commands: Commands, mut virt: ResMut<Time<Virtual>>, options: Res<DemoOptions>, mut frames: Local<u32>, mut taken: Local<bool>) {
     let Some(path) = &options.screenshot else { return };
-    if *taken || time.elapsed_secs() < options.screenshot_after {
+    *frames += 1;
+    if *frames < WARM_UP_FRAMES {
+        virt.pause();
+        return;
+    }
+    if *frames == WARM_UP_FRAMES {
+        virt.unpause();
+    }
+    if *taken || virt.elapsed_secs() < options.screenshot_after {
         return;
     }
     *taken = true;

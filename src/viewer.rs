@@ -58,7 +58,7 @@ pub fn run(scenario: Scenario, mut options: DemoOptions) -> u8 {
                 .init_resource::<Rate>()
                 .init_resource::<Status>()
                 .add_systems(Startup, move |mut commands: Commands| {
-                    let camera = Orbit { focus: framing.focus, yaw: 0.5, pitch: -0.25, distance: framing.distance, keys: true };
+                    let camera = Orbit { focus: framing.focus, yaw: 0.3, pitch: -0.2, distance: framing.distance, keys: true };
                     spawn_scene(&mut commands, camera, framing.distance, HELP);
                 })
                 .add_systems(Update, (controls, look_keys(RED_AT), reset.run_if(reset_asked), (pause_at_end, hud).chain()))
