@@ -203,7 +203,7 @@ fn respawn_starts_the_scenario_again() {
         app.finish();
         app.cleanup();
         app.update();
-        let mut run = |app: &mut App| {
+        let run = |app: &mut App| {
             for _ in 0..updates {
                 app.update();
             }
