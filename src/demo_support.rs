@@ -124,16 +124,20 @@ where
     }
 }
 
+/// Bevy's gizmo settings, if the app has gizmos.
+type GizmoStore<'w> = Option<ResMut<'w, GizmoConfigStore>>;
+
 /// A system: T switches the ropes' tension colours (red at `red_at` N)
 /// on and off, G the node gizmos ([`CableGizmos`]).
-pub fn look_keys(red_at: f32) -> impl FnMut(Res<ButtonInput<KeyCode>>, Query<&mut CableRender>, ResMut<GizmoConfigStore>) {
-    move |keys: Res<ButtonInput<KeyCode>>, mut looks: Query<&mut CableRender>, mut gizmos: ResMut<GizmoConfigStore>| {
+/// (Without Bevy's gizmos, G does nothing.)
+pub fn look_keys(red_at: f32) -> impl FnMut(Res<ButtonInput<KeyCode>>, Query<&mut CableRender>, GizmoStore) {
+    move |keys: Res<ButtonInput<KeyCode>>, mut looks: Query<&mut CableRender>, gizmos: GizmoStore| {
         if keys.just_pressed(KeyCode::KeyT) {
             for mut look in &mut looks {
                 look.color_by_tension = if look.color_by_tension.is_some() { None } else { Some(red_at) };
             }
         }
-        if keys.just_pressed(KeyCode::KeyG) {
+        if let (true, Some(mut gizmos)) = (keys.just_pressed(KeyCode::KeyG), gizmos) {
             let (config, _) = gizmos.config_mut::<CableGizmos>();
             config.enabled = !config.enabled;
         }

@@ -55,13 +55,11 @@ pub fn run(scenario: Scenario, mut options: DemoOptions) -> u8 {
             let title = format!("cablesim view {}", scenario.file.display());
             windowed(&mut app, &title, &options);
             app.insert_resource(GroundGrid { center: framing.ground, cells: framing.cells, spacing: framing.spacing })
-                .init_resource::<Rate>()
-                .init_resource::<Status>()
+                .add_plugins(ViewerPlugin)
                 .add_systems(Startup, move |mut commands: Commands| {
                     let camera = Orbit { focus: framing.focus, yaw: 0.3, pitch: -0.2, distance: framing.distance, keys: true };
                     spawn_scene(&mut commands, camera, framing.distance, HELP);
                 })
-                .add_systems(Update, (controls, look_keys(RED_AT), reset.run_if(reset_asked), (pause_at_end, hud).chain()))
                 // The tint is inserted by commands applied before `dress_bodies` runs.
                 .add_systems(Update, tint_bodies.before(dress_bodies))
                 .add_systems(
@@ -96,6 +94,24 @@ fn tint_bodies(mut commands: Commands, run: Res<ScenarioRun>, new: Query<Entity,
         if let Some(e) = run.bodies.get(&b.name).filter(|e| new.contains(**e)) {
             commands.entity(*e).insert(Tint(palette[k % palette.len()]));
         }
+    }
+}
+
+/// The viewer's controls and HUD, for an app with a scenario
+/// ([`add_scenario`]) and Bevy's `InputPlugin`: Space pauses
+/// (`Time<Virtual>`), N or `.` steps one frame while paused, `+` / `-`
+/// double / halve the time scale, R reloads the scenario's file and
+/// respawns it ([`respawn_scenario`]), T and G toggle the tension colours
+/// and the node gizmos; at the scenario's duration it pauses once; the
+/// [`Hud`] text (if there is one) shows time, real-time factor, largest
+/// tension and probes.
+pub struct ViewerPlugin;
+
+impl Plugin for ViewerPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<Rate>()
+            .init_resource::<Status>()
+            .add_systems(Update, (controls, look_keys(RED_AT), reset.run_if(reset_asked), (pause_at_end, hud).chain()).chain());
     }
 }
 
