@@ -22,7 +22,7 @@
 use crate::demo_support::{dress_bodies, exit_status, headless, look_keys, spawn_scene, windowed, DemoOptions, GroundGrid, Hud, Orbit, Tint};
 use crate::plugin::render::{CableRender, CableRenderSystems};
 use crate::plugin::scenario::{add_scenario, respawn_scenario, ScenarioRun};
-use crate::plugin::{CableDescriptor, CablePlugin, CableState, CableSystems};
+use crate::plugin::{CableAnchor, CableDescriptor, CablePlugin, CableState, CableSystems};
 use crate::scenario::{self, Scenario};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
@@ -64,9 +64,15 @@ pub fn run(scenario: Scenario, mut options: DemoOptions) -> u8 {
                 .add_systems(Update, tint_bodies.before(dress_bodies))
                 .add_systems(
                     Update,
-                    (move |commands: Commands, new: Query<(Entity, &CableDescriptor), Without<CableRender>>| thicken(commands, new, framing.distance))
-                        .before(CableRenderSystems::Interpolate),
-                );
+                    (move |commands: Commands,
+                           meshes: ResMut<Assets<Mesh>>,
+                           materials: ResMut<Assets<StandardMaterial>>,
+                           new: Query<(Entity, &CableDescriptor), Without<CableRender>>| {
+                        thicken(commands, meshes, materials, new, framing.distance)
+                    })
+                    .before(CableRenderSystems::Interpolate),
+                )
+                .add_systems(Update, drop_marks);
         }
     }
     app.add_plugins((RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default()));
@@ -79,11 +85,37 @@ pub fn run(scenario: Scenario, mut options: DemoOptions) -> u8 {
 }
 
 /// New cables are drawn at least 1/400 of the camera distance thick (a
-/// 20 mm rope seen from 50 m is under a pixel).
-fn thicken(mut commands: Commands, new: Query<(Entity, &CableDescriptor), Without<CableRender>>, distance: f32) {
+/// 20 mm rope seen from 50 m is under a pixel), and their world anchors
+/// as small dark balls ([`AnchorMark`]).
+fn thicken(
+    mut commands: Commands,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+    new: Query<(Entity, &CableDescriptor), Without<CableRender>>,
+    distance: f32,
+) {
     for (e, d) in &new {
         let radius = (0.5 * d.material.diameter() as f32).max(distance / 800.0);
         commands.entity(e).insert(CableRender { radius: Some(radius), ..default() });
+        for anchor in [&d.start, &d.end] {
+            if let CableAnchor::World { point, .. } = anchor {
+                let look = (Mesh3d(meshes.add(Sphere::new(4.0 * radius))), MeshMaterial3d(materials.add(Color::srgb(0.15, 0.15, 0.17))));
+                commands.spawn((look, Transform::from_translation(*point), AnchorMark(e)));
+            }
+        }
+    }
+}
+
+/// A world anchor's ball, drawn while its cable exists.
+#[derive(Component)]
+struct AnchorMark(Entity);
+
+/// The balls of despawned cables go.
+fn drop_marks(mut commands: Commands, marks: Query<(Entity, &AnchorMark)>, cables: Query<(), With<CableDescriptor>>) {
+    for (e, m) in &marks {
+        if !cables.contains(m.0) {
+            commands.entity(e).despawn();
+        }
     }
 }
 
