@@ -413,22 +413,32 @@ fn ground_grid(mut gizmos: Gizmos, grid: Res<GroundGrid>) {
     gizmos.grid(on_ground, UVec2::splat(grid.cells), Vec2::splat(grid.spacing), Color::srgba(0.1, 0.1, 0.1, 0.6));
 }
 
-/// Frames rendered with the simulation paused before a `--screenshot`
-/// run starts: the first frames of a software renderer come out black
-/// while the pipelines compile.
-const WARM_UP_FRAMES: u32 = 20;
+/// Frames, and real time, s, rendered with the simulation paused before a
+/// `--screenshot` run starts: the frames of a software renderer come out
+/// black while its pipelines compile (seconds in an unoptimised build,
+/// however many frames a light scene renders meanwhile).
+const WARM_UP: (u32, f32) = (20, 10.0);
 
-/// `--screenshot PATH`: the simulation held for [`WARM_UP_FRAMES`], then
-/// a screenshot once [`DemoOptions::screenshot_after`] s have passed, then
+/// `--screenshot PATH`: the simulation held for the [`WARM_UP`], then a
+/// screenshot once [`DemoOptions::screenshot_after`] s have passed, then
 /// exit.
-fn screenshot(mut commands: Commands, mut virt: ResMut<Time<Virtual>>, options: Res<DemoOptions>, mut frames: Local<u32>, mut taken: Local<bool>) {
+fn screenshot(
+    mut commands: Commands,
+    mut virt: ResMut<Time<Virtual>>,
+    real: Res<Time<bevy::time::Real>>,
+    options: Res<DemoOptions>,
+    mut frames: Local<u32>,
+    mut warm: Local<bool>,
+    mut taken: Local<bool>,
+) {
     let Some(path) = &options.screenshot else { return };
     *frames += 1;
-    if *frames < WARM_UP_FRAMES {
-        virt.pause();
-        return;
-    }
-    if *frames == WARM_UP_FRAMES {
+    if !*warm {
+        if *frames < WARM_UP.0 || real.elapsed_secs() < WARM_UP.1 {
+            virt.pause();
+            return;
+        }
+        *warm = true;
         virt.unpause();
     }
     if *taken || virt.elapsed_secs() < options.screenshot_after {
