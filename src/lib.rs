@@ -55,6 +55,8 @@ pub mod cable;
 #[cfg(feature = "rapier")]
 pub mod coupling;
 pub mod crane;
+#[cfg(feature = "demo")]
+pub mod demo_support;
 pub mod integrate;
 #[cfg(feature = "cli")]
 pub mod output;
@@ -65,6 +67,8 @@ pub mod scenario;
 // With `rapier` alone: the static-solve settings the plugin shares.
 #[cfg(feature = "rapier")]
 pub mod sim;
+#[cfg(all(feature = "demo", feature = "sim"))]
+pub mod viewer;
 
 /// The README's code examples, compiled and run as doctests.
 #[doc = include_str!("../README.md")]

@@ -135,3 +135,14 @@ fn unreadable_scenario_exits_2_naming_file_and_cause() {
         }
     }
 }
+
+/// `cablesim view` in a build without the viewer (feature `demo`): exit 2,
+/// naming the feature and the command that builds it.
+#[cfg(not(feature = "demo"))]
+#[test]
+fn view_without_the_demo_feature_exits_2_naming_it() {
+    let out = cablesim().args(["view", "assets/scenarios/boom_hoist.toml"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("feature `demo`") && stderr.contains("cargo run --release --features demo -- view assets/scenarios/boom_hoist.toml"), "{stderr}");
+}

@@ -50,16 +50,8 @@ fn trolley_crane_runs_headless() {
 #[cfg(feature = "demo")]
 #[test]
 fn hanging_payload_runs_headless() {
-    let out = Command::new(example("hanging_payload")).args(["--headless", "120"]).output().expect("example built by cargo test");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    println!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success());
-    let line = stdout.lines().find(|l| l.starts_with("hanging_payload: t = 2.00 s")).unwrap_or_else(|| panic!("no report line: {stdout}"));
-    let value = |key: &str| -> f64 {
-        let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];
-        rest.split_whitespace().next().and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("{key} in {line}"))
-    };
-    let (tension, sway) = (value("top tension = "), value("sway = "));
+    let line = &report_line("hanging_payload", "120", "hanging_payload: t = 2.00 s");
+    let (tension, sway) = (value_after(line, "top tension = "), value_after(line, "sway = "));
     assert!((9.5..10.5).contains(&tension), "top tension {tension} kN");
     assert!((3.0..8.0).contains(&sway), "sway {sway}°");
 }
@@ -70,4 +62,109 @@ fn hanging_payload_refuses_bad_arguments() {
     let out = Command::new(example("hanging_payload")).args(["--headless", "many"]).output().expect("example built");
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("usage"));
+}
+
+/// Runs a demo with `--headless FRAMES`: it succeeds, and prints a line
+/// starting with `prefix` (returned).
+#[cfg(feature = "demo")]
+fn report_line(name: &str, frames: &str, prefix: &str) -> String {
+    let out = Command::new(example(name)).args(["--headless", frames]).output().expect("example built by cargo test");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    println!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success());
+    stdout.lines().find(|l| l.starts_with(prefix)).unwrap_or_else(|| panic!("no report line: {stdout}")).to_string()
+}
+
+/// The number after `key` in `line`.
+#[cfg(feature = "demo")]
+fn value_after(line: &str, key: &str) -> f64 {
+    let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];
+    rest.split_whitespace().next().map(|v| v.trim_end_matches(',')).and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("{key} in {line}"))
+}
+
+/// The overhead crane, headless: the trolley driven at 1.5 m/s for 2 s
+/// (it reaches it in a few steps) stops near x = 2.9 m; 1 s later the crate
+/// swings back (its first swing, period 6.5 s: a few degrees) on a top
+/// tension near (1000 + 16) kg · g = 9.97 kN (the swing and the braking
+/// add up to about 15 %).
+#[cfg(feature = "demo")]
+#[test]
+fn overhead_crane_runs_headless() {
+    let line = &report_line("overhead_crane", "180", "overhead_crane: t = 3.00 s");
+    let (x, speed, sway, tension) =
+        (value_after(line, "trolley x = "), value_after(line, "speed = "), value_after(line, "sway = "), value_after(line, "top tension = "));
+    assert!((2.7..3.1).contains(&x), "trolley at {x} m");
+    assert!(speed.abs() < 0.2, "trolley speed {speed} m/s");
+    assert!((1.0..15.0).contains(&sway.abs()), "sway {sway}°");
+    assert!((8.5..12.5).contains(&tension), "top tension {tension} kN");
+}
+
+/// The tow rope, headless: 3 s of full throttle (1.5 m/s² to 4 m/s), then
+/// coasting; at 4 s the trailer follows at the truck's speed, the rope
+/// about its length between the hitches, and it does not sag towards the
+/// ground (no rope–ground contact yet: the demo keeps it up).
+#[cfg(feature = "demo")]
+#[test]
+fn tow_rope_runs_headless() {
+    let line = &report_line("tow_rope", "240", "tow_rope: t = 4.00 s");
+    let (truck, trailer, gap, lowest) =
+        (value_after(line, "truck = "), value_after(line, "trailer = "), value_after(line, "gap = "), value_after(line, "lowest rope point = "));
+    assert!((3.4..4.0).contains(&truck), "truck {truck} m/s");
+    assert!((trailer - truck).abs() < 0.5, "trailer {trailer} m/s, truck {truck} m/s");
+    assert!((5.8..6.3).contains(&gap), "gap {gap} m");
+    assert!(lowest > 1.0, "the rope sags to {lowest} m");
+}
+
+/// `cablesim view --headless N` steps a scenario as `cablesim run` does:
+/// the probes it prints after 1 s are `run`'s results.csv row at 1 s.
+#[cfg(all(feature = "demo", feature = "cli"))]
+#[test]
+fn cablesim_view_runs_headless_as_run() {
+    let dir = std::env::temp_dir().join(format!("cablesim_view_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // The shipped hanging payload, 1 s long.
+    let text = std::fs::read_to_string("assets/scenarios/hanging_payload.toml").unwrap();
+    let short = text.lines().map(|l| if l.starts_with("duration") { "duration = 1.0".to_string() } else { l.to_string() }).collect::<Vec<_>>().join("\n");
+    let file = dir.join("hanging_payload_1s.toml");
+    std::fs::write(&file, short).unwrap();
+    let cablesim = env!("CARGO_BIN_EXE_cablesim");
+    let run = Command::new(cablesim).arg("run").arg(&file).arg("--out").arg(&dir).arg("--quiet").output().unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let last: Vec<f64> = csv.lines().last().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+    assert!((last[0] - 1.0).abs() < 1e-9, "last row at {} s", last[0]);
+    let out = Command::new(cablesim).arg("view").arg(&file).args(["--headless", "60"]).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    println!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success());
+    assert!(stdout.contains("t = 1.000 s, 60 frames, max tension = "), "{stdout}");
+    for (name, want) in header.iter().zip(&last).skip(1) {
+        let line = stdout.lines().find(|l| l.trim_start().starts_with(&format!("{name} = "))).unwrap_or_else(|| panic!("no probe {name}: {stdout}"));
+        let got = value_after(line, " = ");
+        assert!((got - want).abs() <= 1e-5 * want.abs().max(1.0), "{name}: view {got}, run {want}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `cablesim view` on a bad file: `run`'s message (file:line:col) and exit
+/// status 2, no panic, no window.
+#[cfg(all(feature = "demo", feature = "cli"))]
+#[test]
+fn cablesim_view_refuses_a_bad_file() {
+    let dir = std::env::temp_dir().join(format!("cablesim_view_bad_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bad.toml");
+    std::fs::write(&file, "[simulation]\nduration = 1.0\ndt = -0.01\n").unwrap();
+    let cablesim = env!("CARGO_BIN_EXE_cablesim");
+    let view = Command::new(cablesim).arg("view").arg(&file).args(["--headless", "5"]).output().unwrap();
+    let run = Command::new(cablesim).arg("check").arg(&file).output().unwrap();
+    let stderr = String::from_utf8_lossy(&view.stderr);
+    assert_eq!(view.status.code(), Some(2), "{stderr}");
+    assert_eq!(stderr, String::from_utf8_lossy(&run.stderr), "view and check give the same message");
+    assert!(stderr.contains("bad.toml:3:"), "{stderr}");
+    let missing = Command::new(cablesim).args(["view", "no/such/file.toml", "--headless", "5"]).output().unwrap();
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("no/such/file.toml"));
+    let _ = std::fs::remove_dir_all(&dir);
 }

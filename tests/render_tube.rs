@@ -109,7 +109,7 @@ fn tangent(nodes: &[Vec3], i: usize) -> Vec3 {
 fn check_tube(mesh: &Mesh, nodes: &[Vec3], sides: usize, radius: f32) {
     let p = f3(mesh, Mesh::ATTRIBUTE_POSITION);
     let n = f3(mesh, Mesh::ATTRIBUTE_NORMAL);
-    assert_eq!(p.len(), nodes.len() * sides);
+    assert_eq!(p.len(), tube_vertex_count(nodes.len(), sides));
     for (i, node) in nodes.iter().enumerate() {
         let t = tangent(nodes, i);
         for j in 0..sides {
@@ -139,7 +139,7 @@ fn tube_vertices_ring_the_drawn_nodes_at_the_radius_with_normals_across_the_tang
     assert_eq!(app.world().get::<CableTubeOf>(t.entity()), Some(&CableTubeOf(cable)));
     assert_eq!(app.world().get::<CableRenderNodes>(cable).unwrap().drawn, nodes);
     check_tube(&mesh(&app, cable), &nodes, 8, 0.05);
-    assert_eq!(indices(&mesh(&app, cable)).len(), (nodes.len() - 1) * 8 * 6);
+    assert_eq!(indices(&mesh(&app, cable)).len(), (nodes.len() - 1) * 8 * 6 + 2 * 8 * 3);
 }
 
 #[test]
@@ -176,7 +176,9 @@ fn topology_never_changes_while_the_rope_moves() {
 
 /// Ring centres (the mean of a ring's vertices) of the tube.
 fn ring_centres(mesh: &Mesh, sides: usize) -> Vec<Vec3> {
-    f3(mesh, Mesh::ATTRIBUTE_POSITION).chunks(sides).map(|r| r.iter().sum::<Vec3>() / sides as f32).collect()
+    let p = f3(mesh, Mesh::ATTRIBUTE_POSITION);
+    // The rings, without the caps' vertices after them.
+    p[..p.len() - 2 * (sides + 1)].chunks(sides).map(|r| r.iter().sum::<Vec3>() / sides as f32).collect()
 }
 
 fn close(a: &[Vec3], b: &[Vec3], tol: f32) -> bool {
@@ -259,10 +261,10 @@ fn straight_vertical_and_coincident_nodes_give_finite_vertices() {
         let cable = drawn_cable(&mut app, &nodes, CableRender { sides: 7, radius: Some(0.03), ..default() });
         let m = mesh(&app, cable);
         let (p, n) = (f3(&m, Mesh::ATTRIBUTE_POSITION), f3(&m, Mesh::ATTRIBUTE_NORMAL));
-        assert_eq!(p.len(), nodes.len() * 7, "{name}");
+        assert_eq!(p.len(), tube_vertex_count(nodes.len(), 7), "{name}");
         assert!(p.iter().chain(&n).all(|v| v.is_finite()), "{name}: a vertex is not finite");
         assert!(n.iter().all(|v| (v.length() - 1.0).abs() < 1e-5), "{name}: a normal is not unit");
-        for (i, ring) in p.chunks(7).enumerate() {
+        for (i, ring) in p[..nodes.len() * 7].chunks(7).enumerate() {
             assert!(ring.iter().all(|v| ((*v - nodes[i]).length() - 0.03).abs() < 1e-5), "{name}: ring {i} off the radius");
         }
         if name == "vertical" {
@@ -392,4 +394,62 @@ fn cables_of_the_plugin_and_sling_legs_are_drawn() {
         assert!(app.world().get_entity(t).is_err(), "the legs' tubes are gone with their cables");
     }
     assert!(app.world().get::<CableTube>(single).is_some(), "the other cable keeps its tube");
+}
+
+/// The end caps: each a fan around its end node, a copy of the end ring
+/// with normals along the rope, out of the tube; with them the tube is a
+/// closed, consistently oriented surface (every edge, by position, is in
+/// exactly two triangles, once in each direction). Moving the rope moves
+/// the caps in the same mesh, indices unchanged.
+#[test]
+fn end_caps_close_the_tube_and_follow_the_rope() {
+    let mut app = render_app();
+    let nodes = bent_nodes();
+    let sides = 9;
+    let cable = drawn_cable(&mut app, &nodes, CableRender { sides: sides as u32, radius: Some(0.05), ..default() });
+    let check_caps = |m: &Mesh, nodes: &[Vec3]| {
+        let (p, n) = (f3(m, Mesh::ATTRIBUTE_POSITION), f3(m, Mesh::ATTRIBUTE_NORMAL));
+        let rings = nodes.len();
+        let last = rings - 1;
+        for (centre, ring, outward) in [(rings * sides, 0, -tangent(nodes, 0)), (rings * sides + sides + 1, last, tangent(nodes, last))] {
+            assert!((p[centre] - nodes[ring]).length() < 1e-6, "cap centre {} on node {ring} {}", p[centre], nodes[ring]);
+            for j in 0..=sides {
+                assert!((n[centre + j] - outward).length() < 1e-5, "cap of ring {ring}: normal {} not {outward}", n[centre + j]);
+            }
+            for j in 0..sides {
+                assert_eq!(p[centre + 1 + j], p[ring * sides + j], "cap of ring {ring}: vertex {j} off the ring");
+            }
+        }
+        check_tube(m, nodes, sides, 0.05);
+        // Closed and consistently oriented, edges keyed by position.
+        let key = |v: Vec3| (v * 1e4).round().as_ivec3().to_array();
+        let mut edges = std::collections::HashMap::new();
+        for tri in indices(m).chunks(3) {
+            for (a, b) in [(tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])] {
+                *edges.entry((key(p[a as usize]), key(p[b as usize]))).or_insert(0) += 1;
+            }
+        }
+        for ((a, b), count) in &edges {
+            assert_eq!(*count, 1, "edge {a:?} → {b:?} used {count} times in one direction");
+            assert_eq!(edges.get(&(*b, *a)), Some(&1), "edge {a:?} → {b:?} has no opposite: the tube is open");
+        }
+    };
+    let m0 = mesh(&app, cable);
+    check_caps(&m0, &nodes);
+    let id = tube(&app, cable).mesh().id();
+    // Move the rope: same mesh, same indices, caps on the new ends.
+    let moved: Vec<Vec3> = nodes.iter().enumerate().map(|(i, p)| *p + Vec3::new(0.3, 0.1 * i as f32, -0.2)).collect();
+    app.world_mut().get_mut::<CableState>(cable).unwrap().nodes = moved.clone();
+    until_recorded(&mut app, cable, &moved);
+    // Past the interpolation: the drawn nodes are the moved ones.
+    app.world_mut().get_mut::<CableState>(cable).unwrap().nodes = moved.clone();
+    for _ in 0..3 {
+        app.update();
+    }
+    let drawn = app.world().get::<CableRenderNodes>(cable).unwrap().drawn.clone();
+    assert!(close(&drawn, &moved, 1e-6), "the moved nodes are drawn");
+    assert_eq!(tube(&app, cable).mesh().id(), id, "the same mesh asset");
+    let m1 = mesh(&app, cable);
+    assert_eq!(indices(&m1), indices(&m0), "the topology is fixed");
+    check_caps(&m1, &moved);
 }

@@ -3,12 +3,19 @@
 //! ```text
 //! cablesim run FILE [--out DIR] [--plot] [--quiet]
 //! cablesim check FILE
-//! cablesim view FILE
+//! cablesim view FILE [--headless FRAMES] [--screenshot FILE.png]
 //! ```
 //! Exit status: 0 success, 2 invalid file (message with file:line:col),
-//! 3 the simulation diverged (the rows computed so far are still written),
-//! 4 the output folder or its files cannot be created or written, 1 the
-//! viewer (not built yet). Usage errors are clap's (2).
+//! 3 the simulation diverged (the rows computed so far are still written;
+//! `view --headless`: a cable diverged), 4 the output folder or its files
+//! cannot be created or written. Usage errors are clap's (2), and so is
+//! `view` in a `cablesim` built without the feature `demo` (the message
+//! says how to build it).
+//!
+//! `view` (feature `demo`, `bevy_rapier_cable::viewer`) opens the scenario
+//! in a window, stepped by the Bevy plugin as `run` steps it; `--headless
+//! N` runs N frames without a window and prints the time, the largest
+//! tension and the probes.
 //!
 //! `run` writes `results.csv` row by row as the run goes (an interrupted
 //! run keeps its rows), and first removes the `results.csv`,
@@ -55,10 +62,17 @@ enum Command {
         /// Scenario file (TOML).
         file: PathBuf,
     },
-    /// Open a scenario in an interactive window.
+    /// Open a scenario in an interactive window (needs the feature `demo`).
     View {
         /// Scenario file (TOML).
         file: PathBuf,
+        /// Run FRAMES frames of `dt` without a window, print the time, the
+        /// largest tension and the probes, and exit.
+        #[arg(long, value_name = "FRAMES")]
+        headless: Option<u64>,
+        /// Save a PNG of the window after 1.5 s of simulated time and exit.
+        #[arg(long, value_name = "FILE.png")]
+        screenshot: Option<PathBuf>,
     },
 }
 
@@ -78,10 +92,7 @@ fn main() -> ExitCode {
             }
             Err(code) => code,
         },
-        Command::View { file } => {
-            eprintln!("error: `cablesim view {}`: the interactive viewer is not built yet (rendering is a later issue); use `cablesim run`", file.display());
-            ExitCode::from(1)
-        }
+        Command::View { file, headless, screenshot } => view(&file, headless, screenshot),
         Command::Run { file, out, plot, quiet } => run(&file, out, plot, quiet),
     }
 }
@@ -203,6 +214,29 @@ fn run(file: &Path, out: Option<PathBuf>, plot: bool, quiet: bool) -> ExitCode {
         );
     }
     ExitCode::SUCCESS
+}
+
+/// `cablesim view`: the file checked as `run` checks it (same messages and
+/// exit status), then the viewer.
+#[cfg(feature = "demo")]
+fn view(file: &Path, headless: Option<u64>, screenshot: Option<PathBuf>) -> ExitCode {
+    let (sc, _) = match load(file) {
+        Ok(x) => x,
+        Err(code) => return code,
+    };
+    let options = bevy_rapier_cable::demo_support::DemoOptions { headless, screenshot, ..Default::default() };
+    ExitCode::from(bevy_rapier_cable::viewer::run(sc, options))
+}
+
+/// `cablesim view` without the viewer built in: exit status 2 (usage).
+#[cfg(not(feature = "demo"))]
+fn view(file: &Path, _headless: Option<u64>, _screenshot: Option<PathBuf>) -> ExitCode {
+    eprintln!(
+        "error: `cablesim view {}`: this cablesim was built without the viewer (feature `demo`); build and run it with\n       cargo run --release --features demo -- view {}",
+        file.display(),
+        file.display()
+    );
+    ExitCode::from(2)
 }
 
 fn write_outputs(rec: &Recorder, dir: &Path, plot: bool, steps: u64, simulated: f64, wall: f64) -> Result<(), bevy_rapier_cable::output::OutputError> {

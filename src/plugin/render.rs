@@ -27,7 +27,8 @@
 //!   component removes the tube (and it is not inserted again).
 //! * **The tube.** A separate entity ([`CableTube::entity`], with
 //!   [`CableTubeOf`]) with a `Mesh3d` (`TriangleList`, one ring of
-//!   [`CableRender::sides`] vertices per node, indices built once) and the
+//!   [`CableRender::sides`] vertices per node, and a flat cap closing each
+//!   end, [`tube_vertex_count`]; indices built once) and the
 //!   shared [`CableTubeMaterial`] (a `StandardMaterial`, base colour white:
 //!   the colour is in the vertex colours). Each frame the positions,
 //!   normals and colours are rewritten in place in the same mesh asset
@@ -440,11 +441,20 @@ fn update_tubes(meshes: Option<ResMut<Assets<Mesh>>>, mut cables: Query<TubeQuer
     }
 }
 
-/// A tube of `rings` × `sides` vertices (positions, normals, colours to be
-/// written) and its triangles (outward, counter-clockwise).
+/// Vertices of a tube of `rings` × `sides` with its two end caps: the
+/// rings (ring `i` from `i * sides`), then each cap's centre followed by
+/// its own ring of `sides` vertices (the start cap at `rings * sides`, the
+/// end cap `sides + 1` after it), whose normals are along the rope.
+pub fn tube_vertex_count(rings: usize, sides: usize) -> usize {
+    rings * sides + 2 * (sides + 1)
+}
+
+/// A tube of `rings` × `sides` vertices and its end caps
+/// ([`tube_vertex_count`]; positions, normals, colours to be written) and
+/// its triangles (outward, counter-clockwise).
 fn tube_mesh(rings: usize, sides: usize) -> Mesh {
-    let n = rings * sides;
-    let mut indices = Vec::with_capacity((rings - 1) * sides * 6);
+    let n = tube_vertex_count(rings, sides);
+    let mut indices = Vec::with_capacity((rings - 1) * sides * 6 + 2 * sides * 3);
     for i in 0..rings - 1 {
         for j in 0..sides {
             let a = (i * sides + j) as u32;
@@ -453,6 +463,15 @@ fn tube_mesh(rings: usize, sides: usize) -> Mesh {
             let d = ((i + 1) * sides + (j + 1) % sides) as u32;
             indices.extend_from_slice(&[a, b, c, b, d, c]);
         }
+    }
+    // The caps: fans around their centres. The ring turns positively about
+    // the tangent, so the end cap (facing +tangent) takes j, j + 1 and the
+    // start cap (facing −tangent) j + 1, j.
+    let (start, end) = (rings * sides, rings * sides + sides + 1);
+    for j in 0..sides {
+        let k = (j + 1) % sides;
+        indices.extend_from_slice(&[start as u32, (start + 1 + k) as u32, (start + 1 + j) as u32]);
+        indices.extend_from_slice(&[end as u32, (end + 1 + j) as u32, (end + 1 + k) as u32]);
     }
     Mesh::new(PrimitiveTopology::TriangleList, RenderAssetUsages::MAIN_WORLD | RenderAssetUsages::RENDER_WORLD)
         .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, vec![[0.0f32; 3]; n])
@@ -507,7 +526,8 @@ fn write_tube(mesh: &mut Mesh, render: &CableRender, radius: f32, nodes: &[Vec3]
         return;
     }
     let sides = render.sides.max(3) as usize;
-    let n = nodes.len() * sides;
+    let rings = nodes.len();
+    let n = tube_vertex_count(rings, sides);
     let tangents = node_tangents(nodes);
     let t0 = tangents[0];
     let mut nrm = (*normal - t0 * normal.dot(t0)).try_normalize().unwrap_or_else(|| t0.any_orthonormal_vector());
@@ -528,6 +548,18 @@ fn write_tube(mesh: &mut Mesh, render: &CableRender, radius: f32, nodes: &[Vec3]
             positions.push((*p + d * radius).to_array());
             normals.push(d.to_array());
             colors.push(c);
+        }
+    }
+    // The caps: a copy of the first and last rings around their nodes, with
+    // normals along the rope (out of the tube).
+    for (ring, outward) in [(0, -tangents[0]), (rings - 1, tangents[rings - 1])] {
+        positions.push(nodes[ring].to_array());
+        normals.push(outward.to_array());
+        colors.push(colors[ring * sides]);
+        for j in 0..sides {
+            positions.push(positions[ring * sides + j]);
+            normals.push(outward.to_array());
+            colors.push(colors[ring * sides]);
         }
     }
     set_attribute(mesh, Mesh::ATTRIBUTE_POSITION, positions);

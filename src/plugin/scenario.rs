@@ -196,10 +196,67 @@ fn after_rapier_step(mut run: ResMut<ScenarioRun>, ctx: ReadRapierContext, handl
 /// the cables', spawns one entity per body and per cable, and inserts
 /// [`ScenarioRun`]. Errors: everything `cablesim` refuses, with its
 /// message, and what is not spawned yet (module docs).
+///
+/// Call it once per app; [`respawn_scenario`] replaces the scenario later
+/// (a viewer's reset).
 pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
+    let gravity = scenario.simulation.gravity;
+    let checked = check_scenario(&scenario)?;
+    spawn_scenario(app.world_mut(), scenario, checked);
+    // Before the first frame rapier's configuration entity does not exist
+    // yet: its gravity is set at start-up.
+    app.add_systems(Startup, move |mut config: Query<&mut RapierConfiguration>| {
+        for mut c in &mut config {
+            c.gravity = gravity.as_vec3();
+        }
+    });
+    app.add_systems(
+        FixedUpdate,
+        (
+            prepare.after(PhysicsSet::SyncBackend).before(CableSystems::Init),
+            drive_rails.after(CableSystems::Init).before(CableSystems::Step),
+            (move_kinematic, drive_rapier_joints).chain().after(CableSystems::Step).before(PhysicsSet::StepSimulation),
+            after_rapier_step.after(PhysicsSet::StepSimulation).before(CableSystems::WriteBodies),
+            sample.in_set(CableSystems::Readout),
+        ),
+    );
+    Ok(())
+}
+
+/// Replaces the running scenario (of an app set up by [`add_scenario`]) by
+/// `scenario`, from its start: checks it as [`add_scenario`] does (an error
+/// leaves the running scenario as it is), despawns the entities of the
+/// running one (its bodies, joints and cables), spawns the new one and
+/// sets the fixed step and gravity again. Run it from an exclusive system
+/// or with `World::run_system_cached_with`-style access to the world,
+/// between frames (a viewer's reset). [`ScenarioRun`] starts again at
+/// t = 0 s.
+pub fn respawn_scenario(world: &mut World, scenario: Scenario) -> Result<(), SimError> {
+    let checked = check_scenario(&scenario)?;
+    if let Some(old) = world.remove_resource::<ScenarioRun>() {
+        let cables = old.cables.iter().map(|(_, e)| *e);
+        // Cables first, then the bodies they hang from.
+        for e in cables.chain(old.bodies.values().copied()) {
+            if let Ok(e) = world.get_entity_mut(e) {
+                e.despawn();
+            }
+        }
+    }
+    let gravity = scenario.simulation.gravity.as_vec3();
+    spawn_scenario(world, scenario, checked);
+    let mut config = world.query::<&mut RapierConfiguration>();
+    for mut c in config.iter_mut(world) {
+        c.gravity = gravity;
+    }
+    Ok(())
+}
+
+/// What [`add_scenario`] refuses beyond `cablesim`'s checks; returns the
+/// rails (the joints of trolleys the cables carry) and the cables'
+/// integrator.
+fn check_scenario(scenario: &Scenario) -> Result<(Vec<String>, Scheme), SimError> {
     let file = scenario.file.display().to_string();
     let unsupported = |location: Location, what: String| SimError::Unsupported { file: file.clone(), location, what };
-    let sim = &scenario.simulation;
     // bevy_rapier holds a joint on the entity of its body2 (one per entity).
     for (k, j) in scenario.joints.iter().enumerate() {
         if let Some(other) = scenario.joints[..k].iter().find(|o| o.body2 == j.body2) {
@@ -216,28 +273,29 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
             format!("the `force` drive of joint `{}`, a trolley's rail, in a Bevy app (cablesim runs it; a `velocity` drive runs in both)", j.name),
         ));
     }
-    let ic = &sim.integrator;
+    let ic = &scenario.simulation.integrator;
     let params = SchemeParams { beta: ic.beta, gamma: ic.gamma, theta: ic.theta, alpha: ic.alpha, rho_inf: ic.rho_inf, w: ic.w };
     let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
+    Ok((rails, scheme))
+}
+
+/// Spawns a checked scenario's entities ([`check_scenario`]), sets the
+/// step and inserts [`ScenarioRun`] (the systems are [`add_scenario`]'s).
+fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<String>, Scheme)) {
+    let sim = &scenario.simulation;
     // The app's fixed step is the scenario's sub-step: cables and rapier
     // step together `substeps` times per frame, as in cablesim.
     let substeps = sim.substeps.unwrap_or(1).max(1);
     let (dt, gravity) = (sim.dt, sim.gravity);
     let h = dt / substeps as f64;
-    app.insert_resource(Time::<Fixed>::from_duration(Duration::from_secs_f64(h)));
-    app.insert_resource(TimestepMode::Fixed { dt: h as f32, substeps: 1 });
+    world.insert_resource(Time::<Fixed>::from_duration(Duration::from_secs_f64(h)));
+    world.insert_resource(TimestepMode::Fixed { dt: h as f32, substeps: 1 });
     {
-        let mut settings = app.world_mut().get_resource_or_insert_with(|| CableSettings { substeps: 1, parallel: true, step: None, gravity: None });
+        let mut settings = world.get_resource_or_insert_with(|| CableSettings { substeps: 1, parallel: true, step: None, gravity: None });
         settings.substeps = 1;
         settings.step = Some(h);
         settings.gravity = Some(gravity);
     }
-    app.add_systems(Startup, move |mut config: Query<&mut RapierConfiguration>| {
-        for mut c in &mut config {
-            c.gravity = gravity.as_vec3();
-        }
-    });
-    let world = app.world_mut();
     let mut bodies = HashMap::new();
     // The ground (`world` in joints), as cablesim's: a fixed body without
     // collider at the origin, created first.
@@ -320,17 +378,6 @@ pub fn add_scenario(app: &mut App, scenario: Scenario) -> Result<(), SimError> {
         rapier_joints: None,
         rails,
     });
-    app.add_systems(
-        FixedUpdate,
-        (
-            prepare.after(PhysicsSet::SyncBackend).before(CableSystems::Init),
-            drive_rails.after(CableSystems::Init).before(CableSystems::Step),
-            (move_kinematic, drive_rapier_joints).chain().after(CableSystems::Step).before(PhysicsSet::StepSimulation),
-            after_rapier_step.after(PhysicsSet::StepSimulation).before(CableSystems::WriteBodies),
-            sample.in_set(CableSystems::Readout),
-        ),
-    );
-    Ok(())
 }
 
 /// Before rapier's step, as `cablesim` does: kinematic bodies with a
