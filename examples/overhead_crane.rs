@@ -11,7 +11,11 @@
 //! * arrow keys left/right or A / D: drive the trolley (1.5 m/s; let go to
 //!   brake), within ±8.5 m of the girder's middle;
 //! * mouse drag: orbit the camera; mouse wheel: zoom;
-//! * R: reset (the trolley, the crate and the rope respawned at rest).
+//! * R: reset (the trolley, the crate and the rope respawned at rest);
+//! * X: anti-sway on/off: your speed commands pass through a ZV input
+//!   shaper (`crane::control::OnlineShaper`) tuned to the crate's pendulum,
+//!   so the crate arrives without swinging, half a swing period later (the
+//!   trolley still stops hard at the travel limits).
 //!
 //! There is no hoisting: the plugin has no winch (paying out or hauling
 //! in rope) yet.
@@ -26,10 +30,13 @@
 //!   tension (used by `tests/examples_headless.rs`).
 //! * `--screenshot FILE.png`: the same script, a screenshot 3 s into the
 //!   run (the crate swinging after the trolley stopped), then exit.
+//! * `--anti-sway`: start with anti-sway on. The headless report then
+//!   also gives the largest sway after 6 s (the shaped stop ends at 5.2 s).
 
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier_cable::cable::RopeMaterial;
+use bevy_rapier_cable::crane::control::{InputShaper, OnlineShaper, ShaperKind};
 use bevy_rapier_cable::demo_support::*;
 use bevy_rapier_cable::plugin::render::CableRender;
 use bevy_rapier_cable::plugin::*;
@@ -51,17 +58,49 @@ const TRAVEL: f32 = 8.5;
 /// The drive's largest force, N.
 const DRIVE_FORCE: f32 = 20_000.0;
 
-const USAGE: &str = "usage: overhead_crane [--headless FRAMES] [--screenshot FILE.png]";
+const USAGE: &str = "usage: overhead_crane [--headless FRAMES] [--screenshot FILE.png] [--anti-sway]";
+
+/// Anti-sway: a ZV shaper on the operator's speed commands.
+#[derive(Resource)]
+struct AntiSway {
+    on: bool,
+    shaper: OnlineShaper,
+    /// Largest |sway| (deg) after 6 s, for the headless report.
+    late_sway: f32,
+}
+
+impl AntiSway {
+    fn new(on: bool) -> Self {
+        // The crate's pendulum: from the rope's top to the crate's centre
+        // (10 m + 0.4 m), its 16 kg of rope lumped (a compound pendulum,
+        // 0.3 % shorter); undamped.
+        let length = (ROPE + CRATE.y) as f64 * 0.997;
+        let shaper = InputShaper::new(ShaperKind::Zv, (9.81 / length).sqrt(), 0.0).expect("a positive pendulum frequency");
+        AntiSway { on, shaper: OnlineShaper::new(shaper), late_sway: 0.0 }
+    }
+}
 
 fn main() {
-    let mut options = DemoOptions::from_args_or_exit(USAGE);
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let anti_sway = args.iter().any(|a| a == "--anti-sway");
+    let mut options = match DemoOptions::parse(args.into_iter().filter(|a| a != "--anti-sway")) {
+        Ok(o) => o,
+        Err(why) => {
+            if !why.is_empty() {
+                eprintln!("{why}");
+            }
+            eprintln!("{USAGE}");
+            std::process::exit(2);
+        }
+    };
     options.screenshot_after = 3.0;
     let mut app = demo_app("bevy_rapier_cable: overhead crane", &options);
     if options.headless.is_some() {
         app.add_systems(FixedUpdate, headless_report.after(CableSystems::Readout));
     } else {
-        app.add_systems(Startup, setup_scene).add_systems(Update, (reset_rig(spawn_rig), hud));
+        app.add_systems(Startup, setup_scene).add_systems(Update, (reset_rig(spawn_rig), hud, toggle_anti_sway));
     }
+    app.insert_resource(AntiSway::new(anti_sway));
     app.add_plugins((RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default()))
         .add_systems(Startup, (setup_crane, spawn_rig).chain())
         .add_systems(FixedUpdate, drive.before(CableSystems::Init));
@@ -178,16 +217,31 @@ fn target_speed(time: &Time, options: &DemoOptions, keys: Option<&ButtonInput<Ke
     }
 }
 
+/// X toggles anti-sway (the shaper keeps listening while off, so turning
+/// it on mid-move does not jump).
+fn toggle_anti_sway(keys: Res<ButtonInput<KeyCode>>, mut anti: ResMut<AntiSway>) {
+    if keys.just_pressed(KeyCode::KeyX) {
+        anti.on = !anti.on;
+    }
+}
+
 /// Fixed step, before the cables: the rail's velocity motor (the plugin
-/// reads it: the trolley is a link of the rope's solve).
+/// reads it: the trolley is a link of the rope's solve), the operator's
+/// command shaped when anti-sway is on.
 fn drive(
     time: Res<Time>,
     options: Res<DemoOptions>,
     keys: Option<Res<ButtonInput<KeyCode>>>,
+    mut anti: ResMut<AntiSway>,
     mut trolley: Query<(&Transform, &mut ImpulseJoint), With<Trolley>>,
 ) {
     let Ok((pose, mut joint)) = trolley.single_mut() else { return };
-    let v = target_speed(&time, &options, keys.as_deref(), pose.translation.x);
+    let x = pose.translation.x;
+    let wanted = target_speed(&time, &options, keys.as_deref(), x);
+    let shaped = anti.shaper.shape(time.elapsed_secs_f64(), wanted as f64) as f32;
+    let v = if anti.on { shaped } else { wanted };
+    // The travel limits stop the trolley whatever the shaper still asks.
+    let v = if (x >= TRAVEL && v > 0.0) || (x <= -TRAVEL && v < 0.0) { 0.0 } else { v };
     let h = time.delta_secs().max(1e-6);
     // Acceleration-based: the speed error halves every step, up to 20 kN.
     joint
@@ -209,23 +263,31 @@ fn readings(trolley: (&Transform, &Velocity), payload: &Transform, rope: &CableS
 /// `--headless N`: one line after N fixed steps, then exit.
 fn headless_report(
     mut report: HeadlessReport,
+    mut anti: ResMut<AntiSway>,
     trolley: Query<(&Transform, &Velocity), With<Trolley>>,
     payload: Query<&Transform, With<Payload>>,
     rope: Query<&CableState, With<Rope>>,
 ) {
+    if let (Ok(t), Ok(p), Ok(state)) = (trolley.single(), payload.single(), rope.single()) {
+        if state.time > 6.0 {
+            anti.late_sway = anti.late_sway.max(readings(t, p, state).0.abs());
+        }
+    }
     if !report.due() {
         return;
     }
     let line = match (trolley.single(), payload.single(), rope.single()) {
         (Ok(t), Ok(p), Ok(state)) => {
             let (sway, tension, speed) = readings(t, p, state);
+            let late = if state.time > 6.0 { format!(", largest sway since 6 s = {:.3} deg", anti.late_sway) } else { String::new() };
             Some(format!(
-                "t = {:.2} s, trolley x = {:.3} m, speed = {:.3} m/s, sway = {:.2} deg, top tension = {:.3} kN",
+                "t = {:.2} s, trolley x = {:.3} m, speed = {:.3} m/s, sway = {:.2} deg, top tension = {:.3} kN, anti-sway {}{late}",
                 state.time,
                 t.0.translation.x,
                 speed,
                 sway,
-                tension / 1000.0
+                tension / 1000.0,
+                if anti.on { "on" } else { "off" }
             ))
         }
         _ => None,
@@ -241,13 +303,14 @@ fn setup_scene(mut commands: Commands, mut grid: ResMut<GroundGrid>) {
         &mut commands,
         camera,
         25.0,
-        "left/right or A/D: drive the trolley   drag: orbit   wheel: zoom   R: reset   (no hoist: the plugin has no winch yet)",
+        "left/right or A/D: drive the trolley   X: anti-sway on/off   drag: orbit   wheel: zoom   R: reset   (no hoist yet)",
     );
 }
 
 /// Time, sway, tension, trolley speed.
 fn hud(
     time: Res<Time>,
+    anti: Res<AntiSway>,
     trolley: Query<(&Transform, &Velocity), With<Trolley>>,
     payload: Query<&Transform, With<Payload>>,
     rope: Query<&CableState, With<Rope>>,
@@ -258,12 +321,13 @@ fn hud(
         (Ok(t), Ok(p), Ok(state)) => {
             let (sway, tension, speed) = readings(t, p, state);
             format!(
-                "t = {:6.2} s   sway {:6.2} deg   rope tension {:6.2} kN   trolley {:5.2} m/s at x = {:5.2} m   (1 t crate, 10 m of 20 mm steel rope)",
+                "t = {:6.2} s   sway {:6.2} deg   rope tension {:6.2} kN   trolley {:5.2} m/s at x = {:5.2} m   anti-sway {}",
                 time.elapsed_secs(),
                 sway,
                 tension / 1000.0,
                 speed,
-                t.0.translation.x
+                t.0.translation.x,
+                if anti.on { "ON (ZV)" } else { "off" }
             )
         }
         _ => format!("t = {:6.2} s   (rope building)", time.elapsed_secs()),
