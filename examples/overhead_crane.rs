@@ -81,18 +81,8 @@ impl AntiSway {
 }
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let anti_sway = args.iter().any(|a| a == "--anti-sway");
-    let mut options = match DemoOptions::parse(args.into_iter().filter(|a| a != "--anti-sway")) {
-        Ok(o) => o,
-        Err(why) => {
-            if !why.is_empty() {
-                eprintln!("{why}");
-            }
-            eprintln!("{USAGE}");
-            std::process::exit(2);
-        }
-    };
+    let (mut options, flags) = DemoOptions::from_args_with_flags_or_exit(USAGE, &["--anti-sway"]);
+    let anti_sway = !flags.is_empty();
     options.screenshot_after = 3.0;
     let mut app = demo_app("bevy_rapier_cable: overhead crane", &options);
     if options.headless.is_some() {

@@ -69,8 +69,16 @@ impl DemoOptions {
     /// [`DemoOptions::parse`] of the process's arguments; on an error
     /// prints it and `usage`, and exits with status 2.
     pub fn from_args_or_exit(usage: &str) -> DemoOptions {
-        match DemoOptions::parse(std::env::args().skip(1)) {
-            Ok(o) => o,
+        DemoOptions::from_args_with_flags_or_exit(usage, &[]).0
+    }
+
+    /// [`DemoOptions::from_args_or_exit`] for a demo with its own on/off
+    /// `flags` (such as `--anti-sway`): also returns those given.
+    pub fn from_args_with_flags_or_exit(usage: &str, flags: &[&'static str]) -> (DemoOptions, Vec<&'static str>) {
+        let args: Vec<String> = std::env::args().skip(1).collect();
+        let given: Vec<&'static str> = flags.iter().copied().filter(|f| args.iter().any(|a| a == f)).collect();
+        match DemoOptions::parse(args.into_iter().filter(|a| !flags.contains(&a.as_str()))) {
+            Ok(o) => (o, given),
             Err(why) => {
                 if !why.is_empty() {
                     eprintln!("{why}");
