@@ -76,7 +76,7 @@ fn overhead_crane_equations_are_the_textbook_ones() {
 fn overhead_crane_swings_at_the_closed_form_frequencies() {
     let crane = OverheadCrane::new(500.0, 1000.0, 10.0).unwrap();
     let omega = crane.free_trolley_frequency();
-    let lin = crane.linearized();
+    let lin = crane.linearized().unwrap();
     let mut sys = crane.clone().system();
     let mut state = State::new(&mut sys, 0.0, vec![0.0, 0.001], vec![0.0, 0.0]).unwrap();
     let ups = upward_crossings(&mut sys, &mut state, 1, 1e-3, 40.0);

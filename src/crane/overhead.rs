@@ -3,7 +3,7 @@
 
 use super::lagrange::{Jet, LagrangeSystem, PointMassModel};
 use super::{check_positive, CraneError, TrolleyDrive};
-use crate::integrate::DenseSystem;
+use crate::integrate::{DenseSystem, DenseSystemError};
 
 /// Trolley (mass `M` on a horizontal rail, position `x`) and payload (point
 /// mass `m` on a massless rope of length `l`, sway angle `θ` from the
@@ -70,7 +70,8 @@ impl OverheadCrane {
 
     /// The equations linearised about rest (`θ = θ̇ = 0`), without the drive:
     /// `[[M + m, m l], [m l, m l²]] q̈ + diag(c_x, c_θ) q̇ + [[0, 0], [0, m g l]] q = [F, 0]`.
-    pub fn linearized(&self) -> DenseSystem {
+    /// An error when a field was set to a non-finite value.
+    pub fn linearized(&self) -> Result<DenseSystem, DenseSystemError> {
         let (mm, m, l) = (self.trolley_mass, self.payload_mass, self.rope_length);
         DenseSystem::new(
             2,
@@ -78,7 +79,6 @@ impl OverheadCrane {
             vec![self.trolley_damping, 0.0, 0.0, self.sway_damping],
             vec![0.0, 0.0, 0.0, m * self.gravity * l],
         )
-        .expect("2 × 2 matrices of finite entries")
     }
 
     /// The nonlinear equations as a system every integrator steps.
