@@ -186,6 +186,32 @@ impl<M: PointMassModel> LagrangeSystem<M> {
         m
     }
 
+    /// Adds `coef ∂r/∂q` (or `coef ∂r/∂q̇` with `wrt_velocity`) at
+    /// `(t, q, q̇, q̈)` to the row-major `out`, by central differences of the
+    /// residual (step `1e-6 (1 + |x|)` per coordinate).
+    #[allow(clippy::too_many_arguments)]
+    fn add_tangent(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], wrt_velocity: bool, coef: f64, out: &mut [f64]) -> Result<(), SystemError> {
+        let n = self.model.dof();
+        let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
+        let (mut qs, mut vs) = (q.to_vec(), v.to_vec());
+        for c in 0..n {
+            let x = if wrt_velocity { &mut vs } else { &mut qs };
+            let base = x[c];
+            let e = 1e-6 * (1.0 + base.abs());
+            x[c] = base + e;
+            self.residual(t, &qs, &vs, a, &mut rp)?;
+            let x = if wrt_velocity { &mut vs } else { &mut qs };
+            x[c] = base - e;
+            self.residual(t, &qs, &vs, a, &mut rm)?;
+            let x = if wrt_velocity { &mut vs } else { &mut qs };
+            x[c] = base;
+            for row in 0..n {
+                out[row * n + c] += coef * (rp[row] - rm[row]) / (2.0 * e);
+            }
+        }
+        Ok(())
+    }
+
     /// Positions on jets along direction `v` (into `self.points`).
     fn eval(&mut self, q: &[f64], v: &[f64]) {
         for ((j, qi), vi) in self.jets.iter_mut().zip(q).zip(v) {
@@ -257,77 +283,37 @@ impl<M: PointMassModel> SecondOrderSystem for LagrangeSystem<M> {
         let mut sys = self.clone();
         let zeros = vec![0.0; n];
         let mass = sys.mass_matrix(q);
-        let mut worst = (0.0f64, 0.0f64);
-        for (which, (cq, cv)) in [(0usize, (1.0, 0.0)), (1, (0.0, 1.0))] {
-            // Columns of the tangent: (M + c_q K + c_v C) e_j − M e_j.
+        // Gershgorin bound of M⁻¹ T for the stiffness (T = K_t) and the
+        // damping (T = C_t) tangents.
+        let mut bound = |wrt_velocity: bool| -> Option<f64> {
             let mut tangent = vec![0.0; n * n];
-            let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
-            for c in 0..n {
-                let mut qs = q.to_vec();
-                let mut vs = zeros.clone();
-                let e = 1e-6 * (1.0 + q[c].abs());
-                if which == 0 {
-                    qs[c] += e;
-                } else {
-                    vs[c] += e;
-                }
-                sys.residual(0.0, &qs, &vs, &zeros, &mut rp).ok()?;
-                if which == 0 {
-                    qs[c] -= 2.0 * e;
-                } else {
-                    vs[c] -= 2.0 * e;
-                }
-                sys.residual(0.0, &qs, &vs, &zeros, &mut rm).ok()?;
-                for r in 0..n {
-                    tangent[r * n + c] = (rp[r] - rm[r]) / (2.0 * e) * (cq + cv);
-                }
-            }
-            // M⁻¹ times each column, then the largest absolute row sum.
+            sys.add_tangent(0.0, q, &zeros, &zeros, wrt_velocity, 1.0, &mut tangent).ok()?;
             let mut rows = vec![0.0f64; n];
             let mut col = vec![0.0; n];
             for c in 0..n {
                 let mut m = mass.clone();
                 let b: Vec<f64> = (0..n).map(|r| tangent[r * n + c]).collect();
                 crate::integrate::gauss_solve(n, &mut m, &b, &mut col).ok()?;
-                for r in 0..n {
-                    rows[r] += col[r].abs();
+                for (row, x) in rows.iter_mut().zip(&col) {
+                    *row += x.abs();
                 }
             }
-            let g = rows.iter().fold(0.0f64, |m, x| m.max(*x));
-            if which == 0 {
-                worst.0 = g;
-            } else {
-                worst.1 = g;
-            }
-        }
-        Some(worst.0.sqrt().max(worst.1))
+            Some(rows.iter().fold(0.0f64, |m, x| m.max(*x)))
+        };
+        let stiffness = bound(false)?;
+        let damping = bound(true)?;
+        Some(stiffness.sqrt().max(damping))
     }
 
     fn solve_tangent(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         let n = self.model.dof();
         // M exactly, K_t and C_t by central differences of the residual.
         let mut m = self.mass_matrix(q);
-        let (mut rp, mut rm) = (vec![0.0; n], vec![0.0; n]);
-        let (mut qs, mut vs) = (q.to_vec(), v.to_vec());
-        for c in 0..n {
-            for (which, coef) in [(0, c_q), (1, c_v)] {
-                if coef == 0.0 {
-                    continue;
-                }
-                let base = if which == 0 { q[c] } else { v[c] };
-                let e = 1e-6 * (1.0 + base.abs());
-                let target = if which == 0 { &mut qs } else { &mut vs };
-                target[c] = base + e;
-                self.residual(t, &qs, &vs, a, &mut rp)?;
-                let target = if which == 0 { &mut qs } else { &mut vs };
-                target[c] = base - e;
-                self.residual(t, &qs, &vs, a, &mut rm)?;
-                let target = if which == 0 { &mut qs } else { &mut vs };
-                target[c] = base;
-                for row in 0..n {
-                    m[row * n + c] += coef * (rp[row] - rm[row]) / (2.0 * e);
-                }
-            }
+        if c_q != 0.0 {
+            self.add_tangent(t, q, v, a, false, c_q, &mut m)?;
+        }
+        if c_v != 0.0 {
+            self.add_tangent(t, q, v, a, true, c_v, &mut m)?;
         }
         crate::integrate::gauss_solve(n, &mut m, b, x)
     }
