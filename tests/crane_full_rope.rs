@@ -11,7 +11,6 @@ use bevy_rapier_cable::crane::OverheadCrane;
 use bevy_rapier_cable::scenario;
 use bevy_rapier_cable::sim::World;
 
-const G: f64 = 9.81;
 const ROPE: f64 = 10.0;
 const RADIUS: f64 = 0.3;
 /// Linear density of the 20 mm 6×36 IWRC rope, kg/m (the material's).
@@ -113,15 +112,10 @@ quantity = "position"
     rows
 }
 
-/// The reduced model with the rope's mass lumped: a rigid compound
-/// pendulum (rope `ρ L` uniform from the pivot, payload `m` at `l`) has
-/// `ω² = g (m l + ρL²/2)/(m l² + ρL³/3)`, so the equivalent point mass is
-/// `m + ρL` at `l_eq = (m l² + ρL³/3)/(m l + ρL²/2)` (same static moment
-/// and inertia to first order in ρL/m).
+/// The reduced model with the rope's mass lumped as a rigid compound
+/// pendulum (`OverheadCrane::with_rope_mass`).
 fn reduced(shaped: &ShapedMove, duration: f64) -> Vec<(f64, f64, f64)> {
-    let (m, rho, l) = (1000.0, rope_density(), ROPE + RADIUS);
-    let l_eq = (m * l * l + rho * ROPE.powi(3) / 3.0) / (m * l + rho * ROPE * ROPE / 2.0);
-    let crane = OverheadCrane::new(500.0, m + rho * ROPE, l_eq).unwrap();
+    let crane = OverheadCrane::with_rope_mass(500.0, 1000.0, ROPE + RADIUS, rope_density(), ROPE).unwrap();
     // The rail's velocity drive is rapier's acceleration-based motor with
     // damping 1/dt on the trolley's mass: the same speed loop here.
     let gain = 500.0 * 60.0;
@@ -181,5 +175,4 @@ fn full_rope_crane_follows_the_reduced_model() {
     let rz = residual(&full_zv, after + zv.shaper.duration());
     println!("ZV on the full rope: residual {:.4}° = {:.4} of unshaped", rz.to_degrees(), rz / rf);
     assert!(rz < 0.05 * rf, "ZV leaves {rz} of {rf}");
-    let _ = G;
 }

@@ -81,9 +81,9 @@ fn trolley_control_moves_a_payload_without_sway_in_a_bevy_app() {
     let after = mv.t0 + mv.duration() + 1.0;
     let unshaped = residual(&rows, after);
     // The reduced model as in tests/crane_full_rope.rs.
-    let (m, rho, l) = (1000.0, RopeMaterial::steel_6x36_iwrc(0.02).section().linear_density, 10.3);
-    let l_eq = (m * l * l + rho * 1000.0 / 3.0) / (m * l + rho * 100.0 / 2.0);
-    let crane = OverheadCrane::new(500.0, m + rho * 10.0, l_eq).unwrap();
+    let rho = RopeMaterial::steel_6x36_iwrc(0.02).section().linear_density;
+    let crane = OverheadCrane::with_rope_mass(500.0, 1000.0, 10.3, rho, 10.0).unwrap();
+    let l_eq = crane.rope_length;
     let mut lp = OverheadCraneLoop::new(crane, none, 0.0, 500.0 * 60.0, 1e6).unwrap();
     let mut reduced = Vec::new();
     while lp.state.t < 40.0 {
@@ -106,7 +106,7 @@ fn trolley_control_moves_a_payload_without_sway_in_a_bevy_app() {
     println!("ZV in a Bevy app: residual sway {:.4}° = {:.4} of unshaped", shaped.to_degrees(), shaped / unshaped);
     assert!(shaped < 0.05 * unshaped, "ZV leaves {shaped}");
 
-    let reduced_crane = OverheadCrane::new(500.0, m + rho * 10.0, l_eq).unwrap();
+    let reduced_crane = OverheadCrane::with_rope_mass(500.0, 1000.0, 10.3, rho, 10.0).unwrap();
     let (mut p, s) = DoubleLoopPid::place_poles(&reduced_crane, [(1.2, 0.7), (1.8, 0.7)]);
     p.ki = 0.05 * p.kp;
     let rows = run(DoubleLoopPid::new(mv, p, s, 2e4).unwrap(), 40.0);

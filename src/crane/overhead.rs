@@ -43,6 +43,30 @@ impl OverheadCrane {
         Ok(OverheadCrane { trolley_mass, payload_mass, rope_length, gravity: 9.81, trolley_damping: 0.0, sway_damping: 0.0, drive: TrolleyDrive::Force(0.0) })
     }
 
+    /// The reduced model of a payload of mass `payload_mass` (kg) whose
+    /// centre hangs `payload_distance` (m) below the trolley's rope point
+    /// on a rope of `rope_length` m and `rope_density` kg/m (the rope
+    /// straight from the rope point). The rope's mass is lumped as in a
+    /// rigid compound pendulum: the payload becomes `m + ρL` at
+    /// `l = (m d² + ρL³/3)/(m d + ρL²/2)`, which keeps the pendulum's
+    /// `ω² = g (m d + ρL²/2)/(m d² + ρL³/3)`. Every value must be positive
+    /// and finite (the rope density may be 0).
+    pub fn with_rope_mass(trolley_mass: f64, payload_mass: f64, payload_distance: f64, rope_density: f64, rope_length: f64) -> Result<Self, CraneError> {
+        check_positive("overhead crane", "payload_distance", payload_distance)?;
+        check_positive("overhead crane", "rope_length", rope_length)?;
+        if !(rope_density.is_finite() && rope_density >= 0.0) {
+            return Err(CraneError::InvalidParameter {
+                model: "overhead crane",
+                field: "rope_density",
+                value: rope_density,
+                requirement: "non-negative and finite",
+            });
+        }
+        let (m, d, rho, l) = (payload_mass, payload_distance, rope_density, rope_length);
+        let length = (m * d * d + rho * l.powi(3) / 3.0) / (m * d + rho * l * l / 2.0);
+        OverheadCrane::new(trolley_mass, m + rho * l, length)
+    }
+
     /// With rail friction `c_x` (N·s/m) and sway damping `c_θ` (N·m·s/rad).
     pub fn with_damping(mut self, trolley: f64, sway: f64) -> Self {
         self.trolley_damping = trolley;
