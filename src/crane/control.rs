@@ -5,7 +5,7 @@
 //! a [`TrolleyCommand`]; [`OverheadCraneLoop`] closes the loop on the
 //! reduced [`OverheadCrane`].
 
-use super::{check_positive, limit, CraneError, LagrangeSystem, OverheadCrane, TrolleyDrive};
+use super::{check_limit, check_positive, limit, CraneError, LagrangeSystem, OverheadCrane, TrolleyDrive};
 
 use crate::integrate::{Integrator, State};
 
@@ -305,9 +305,7 @@ pub struct NonlinearSchedule {
 
 /// Checks a PID's gains and force limit.
 fn check_controller(model: &'static str, position: &PidGains, sway: &PidGains, max_force: f64) -> Result<(), CraneError> {
-    if max_force.is_nan() || max_force <= 0.0 {
-        return Err(CraneError::InvalidParameter { model, field: "max_force", value: max_force, requirement: "positive" });
-    }
+    check_limit(model, "max_force", max_force)?;
     for (field, value) in [
         ("position kp", position.kp),
         ("position ki", position.ki),
@@ -481,9 +479,7 @@ impl<C: TrolleyController> OverheadCraneLoop<C> {
     /// positive.
     pub fn new(crane: OverheadCrane, controller: C, x0: f64, speed_gain: f64, max_force: f64) -> Result<Self, CraneError> {
         check_positive("overhead crane loop", "speed_gain", speed_gain)?;
-        if max_force.is_nan() || max_force <= 0.0 {
-            return Err(CraneError::InvalidParameter { model: "overhead crane loop", field: "max_force", value: max_force, requirement: "positive" });
-        }
+        check_limit("overhead crane loop", "max_force", max_force)?;
         let mut system = crane.system();
         let state = State::new(&mut system, 0.0, vec![x0, 0.0], vec![0.0, 0.0])?;
         Ok(OverheadCraneLoop { system, state, controller, speed_gain, max_force, integrator: Integrator::default() })

@@ -56,6 +56,15 @@ pub enum CraneError {
     Integrate(#[from] crate::integrate::IntegrateError),
 }
 
+/// A force limit: positive, infinity allowed (no limit).
+pub(crate) fn check_limit(model: &'static str, field: &'static str, value: f64) -> Result<(), CraneError> {
+    if value > 0.0 {
+        Ok(())
+    } else {
+        Err(CraneError::InvalidParameter { model, field, value, requirement: "positive" })
+    }
+}
+
 /// `x` limited to `±bound` (N): `|bound|` is used, a NaN bound gives 0.
 pub(crate) fn limit(x: f64, bound: f64) -> f64 {
     let b = bound.abs();
