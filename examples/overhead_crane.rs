@@ -200,10 +200,16 @@ fn target_speed(time: &Time, options: &DemoOptions, keys: Option<&ButtonInput<Ke
     } else {
         0.0
     };
-    if (x >= TRAVEL && wanted > 0.0) || (x <= -TRAVEL && wanted < 0.0) {
+    within_travel(x, wanted)
+}
+
+/// `v` (m/s), or 0 when it would take the trolley at `x` (m) past a
+/// travel limit.
+fn within_travel(x: f32, v: f32) -> f32 {
+    if (x >= TRAVEL && v > 0.0) || (x <= -TRAVEL && v < 0.0) {
         0.0
     } else {
-        wanted
+        v
     }
 }
 
@@ -231,7 +237,7 @@ fn drive(
     let shaped = anti.shaper.shape(time.elapsed_secs_f64(), wanted as f64) as f32;
     let v = if anti.on { shaped } else { wanted };
     // The travel limits stop the trolley whatever the shaper still asks.
-    let v = if (x >= TRAVEL && v > 0.0) || (x <= -TRAVEL && v < 0.0) { 0.0 } else { v };
+    let v = within_travel(x, v);
     let h = time.delta_secs().max(1e-6);
     // Acceleration-based: the speed error halves every step, up to 20 kN.
     joint
