@@ -136,4 +136,16 @@ pub trait SecondOrderSystem {
     fn nonlinear_update(&mut self, _q: &[f64], _dx: &[f64], _scale: f64, _out: &mut [f64]) -> bool {
         false
     }
+
+    /// Whether a Newton solve may continue past
+    /// [`NewtonSettings::max_iterations`](crate::integrate::NewtonSettings::max_iterations),
+    /// up to [`PATIENT_BUDGET`](crate::integrate::PATIENT_BUDGET) times it,
+    /// as long as each correction is smaller than the one before. A system
+    /// whose tangent leaves out terms that can be large opts in: Newton on
+    /// it then converges linearly, not quadratically, and a few more
+    /// iterations solve the same equations where splitting the step would
+    /// resolve dynamics the full step filters out. Default `false`.
+    fn patient_newton(&self) -> bool {
+        false
+    }
 }

@@ -97,6 +97,14 @@ impl SecondOrderSystem for Chain {
     fn release_branches(&mut self) {
         self.frozen = false;
     }
+    /// A chain with force elements ([`Chain::forces`]): a stiff one can
+    /// whip a payload about at 100 g, where the inertia terms the O(n)
+    /// tangent leaves out (not symmetric: it needs symmetric link blocks)
+    /// slow Newton to a linear rate (docs/architecture.md, "Force
+    /// elements").
+    fn patient_newton(&self) -> bool {
+        !self.forces.is_empty()
+    }
     fn nonlinear_update(&mut self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) -> bool {
         // Only a chain closed by anchor springs needs it (an open chain's
         // tip is free, and the plain sum costs nothing).
