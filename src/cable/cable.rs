@@ -2,7 +2,7 @@
 //! the queries users read (node positions, tension, moments, energy).
 
 use super::chain::{LinkLoad, SpringLaw, StaticError, IN_CHAIN};
-use super::force::{AttachedForce, ForceElement};
+use super::force::{AttachedForce, ForceElement, PointState, PointWrench};
 use super::rope::{RopeLayout, RopeModel, ELEMENT_DOFS};
 use super::spatial::V6;
 use crate::integrate::{IntegrateError, Integrator, Scheme, State, StepStats};
@@ -346,6 +346,14 @@ impl Cable {
         true
     }
 
+    /// Each force element's point (world state) and the wrench it applies
+    /// there now, in the order they were added ([`Chain::forces`](super::chain::Chain::forces)): the
+    /// contact force of a [`SphereContact`](super::SphereContact), the
+    /// pull of a [`PointSpring`](super::PointSpring).
+    pub fn force_element_wrenches(&self) -> Vec<(PointState, PointWrench)> {
+        self.model.chain.force_element_wrenches(self.state.t)
+    }
+
     /// Removes every force element added with [`Cable::add_force_element`]
     /// (the end springs stay).
     pub fn clear_force_elements(&mut self) {
@@ -357,7 +365,14 @@ impl Cable {
     fn rope_point(&self, rope: usize, s: f64) -> Option<(usize, DVec3)> {
         let view = self.rope(rope)?;
         let (l, reversed, length) = (*view.layout(), view.reversed(), view.length());
-        let (i, f) = locate(&l, if reversed { length - s } else { s });
+        let (mut i, mut f) = locate(&l, if reversed { length - s } else { s });
+        // An element's link carries its slides at its start: its local
+        // (L_e, 0, 0) is the next node exactly, its origin is the node
+        // moved by the element's stretch and shear. A point at a node goes
+        // on the element that ends there.
+        if f == 0.0 && i > 0 {
+            (i, f) = (i - 1, 1.0);
+        }
         Some((l.element_link(i), DVec3::new(f * l.element_length, 0.0, 0.0)))
     }
 

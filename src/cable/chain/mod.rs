@@ -27,7 +27,7 @@ pub use nonsmooth::StaticError;
 pub use parts::*;
 pub(crate) use sweep::*;
 
-use super::force::{AttachedForce, ForceElement};
+use super::force::{AttachedForce, ForceElement, PointState, PointWrench};
 use super::spatial::{M6, V6};
 use crate::integrate::SystemError;
 use glam::{DMat3, DVec3};
@@ -678,6 +678,19 @@ impl Chain {
         let p = self.joint_point(s)? - self.origin;
         let vel = self.poses[s].vel;
         Some(vel.bot + vel.top.cross(p))
+    }
+
+    /// The world state of each force element's point ([`Chain::forces`],
+    /// in order) and the wrench the element applies there at time `t` (s),
+    /// at the last kinematics pass's poses.
+    pub fn force_element_wrenches(&self, t: f64) -> Vec<(PointState, PointWrench)> {
+        self.forces
+            .iter()
+            .map(|f| {
+                let at = point_state(&self.poses[f.link], self.origin, f.local_point).0;
+                (at, f.element.wrench(t, &at))
+            })
+            .collect()
     }
 
     /// Potential energy of the anchor springs and force elements
