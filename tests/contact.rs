@@ -119,7 +119,7 @@ fn rope_on_ground(n: usize) -> (Cable, ImpactLaw, f64) {
     let e_star = 1.0 / (2.0 * (1.0 - 0.09) / 210e9);
     let law = ImpactLaw::hertz(e_star, r, 2e3, 1e-5).unwrap();
     for k in 0..=n {
-        let contact = SphereContact { point: DVec3::ZERO, normal: DVec3::Y, radius: r, law };
+        let contact = SphereContact::fixed(DVec3::ZERO, DVec3::Y, r, law);
         assert!(cable.add_force_element(0, 10.0 * k as f64 / n as f64, Arc::new(contact)));
     }
     (cable, law, section.linear_density)
@@ -128,14 +128,14 @@ fn rope_on_ground(n: usize) -> (Cable, ImpactLaw, f64) {
 /// The contact forces at the rope's nodes (N) and the largest penetration (m).
 fn ground_forces(cable: &Cable, law: ImpactLaw, n: usize) -> (Vec<f64>, f64) {
     let r = 0.01;
-    let contact = SphereContact { point: DVec3::ZERO, normal: DVec3::Y, radius: r, law };
+    let contact = SphereContact::fixed(DVec3::ZERO, DVec3::Y, r, law);
     let mut forces = Vec::new();
     let mut depth = 0.0f64;
     for k in 0..=n {
         let (point, velocity) = cable.point_at(10.0 * k as f64 / n as f64);
         let at = PointState { rotation: glam::DMat3::IDENTITY, point, velocity, angular_velocity: DVec3::ZERO };
-        forces.push(contact.normal_force(&at));
-        depth = depth.max(contact.depth(&at).0);
+        forces.push(contact.normal_force(cable.time(), &at));
+        depth = depth.max(contact.depth(cable.time(), &at).0);
     }
     (forces, depth)
 }
@@ -222,7 +222,7 @@ fn a_payload_lowered_onto_the_ground_comes_to_rest_and_its_rope_goes_slack() {
     let eb = cable.model.layout.end_body.unwrap();
     let e_star = 210e9 / (1.0 - 0.09);
     let law = ImpactLaw::hertz(e_star, radius, 1e6, 1e-5).unwrap();
-    let floor = SphereContact { point: DVec3::ZERO, normal: DVec3::Y, radius, law };
+    let floor = SphereContact::fixed(DVec3::ZERO, DVec3::Y, radius, law);
     cable.model.chain.forces_mut().push(AttachedForce { link: eb.link, local_point: eb.origin, element: Arc::new(floor) });
     let (mut steps, mut last_second) = (0, Vec::new());
     while cable.time() < 8.0 - 1e-9 {

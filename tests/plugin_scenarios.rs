@@ -111,7 +111,7 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 16] = [
+const COMPARED: [&str; 18] = [
     "axial_bounce",
     "bend_45",
     "boom_hoist",
@@ -123,6 +123,8 @@ const COMPARED: [&str; 16] = [
     "hanging_payload",
     "pendulum_60deg",
     "perf_swing_1000",
+    "rope_on_ground",
+    "rope_over_cylinder",
     "spin_up",
     "taut_string",
     "trolley_kick",
@@ -159,6 +161,8 @@ same_rows!(
     hanging_payload,
     pendulum_60deg,
     perf_swing_1000,
+    rope_on_ground,
+    rope_over_cylinder,
     spin_up,
     taut_string,
     trolley_kick,

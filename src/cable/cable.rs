@@ -731,6 +731,20 @@ impl RopeView<'_> {
         m.element_forces_in(l, k, q, v)
     }
 
+    /// The sum of the normal forces of the contacts on this rope
+    /// ([`ForceElement::contact_force`]: the [`SphereContact`](super::SphereContact)s
+    /// among its force elements) now, N.
+    pub fn contact_force(&self) -> f64 {
+        let ch = &self.cable.model.chain;
+        let (first, last) = (self.layout.dof(0, 0), self.layout.dof(self.layout.elements, 0));
+        ch.forces()
+            .iter()
+            .zip(ch.force_element_wrenches(self.cable.state.t))
+            .filter(|(f, _)| (first..last).contains(&f.link))
+            .filter_map(|(f, (at, _))| f.element.contact_force(self.cable.state.t, &at))
+            .sum()
+    }
+
     /// Axial tension (N) at arc length `s` (m, from the user's start): the
     /// force of the element joint nearest to `s`.
     pub fn tension_at(&self, s: f64) -> f64 {

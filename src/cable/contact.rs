@@ -117,15 +117,21 @@ impl ImpactLaw {
     }
 }
 
-/// A sphere of radius `radius` centred on a link point, against a fixed
-/// plane through `point` with unit outward `normal` (the obstacle's
-/// surface, frozen for the step), pushed out by an [`ImpactLaw`].
+/// A sphere of radius `radius` centred on a link point, against a plane
+/// through `point` with unit outward `normal` (the obstacle's surface,
+/// frozen for the step), which translates at `velocity` from time `time`
+/// (a moving obstacle; zero for a fixed one), pushed out by an
+/// [`ImpactLaw`] on the penetration and its rate relative to the plane.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SphereContact {
-    /// A point of the plane, world, m.
+    /// A point of the plane at `time`, world, m.
     pub point: DVec3,
     /// The plane's unit normal, out of the obstacle, world.
     pub normal: DVec3,
+    /// The plane's velocity, world, m/s.
+    pub velocity: DVec3,
+    /// The time at which the plane passes through `point`, s.
+    pub time: f64,
     /// The sphere's radius (the rope's radius for a rope element), m.
     pub radius: f64,
     /// The normal law.
@@ -133,22 +139,30 @@ pub struct SphereContact {
 }
 
 impl SphereContact {
-    /// Penetration (m, > 0 inside) and its rate (m/s, > 0 approaching) at
-    /// the point's state.
-    pub fn depth(&self, at: &PointState) -> (f64, f64) {
-        (self.radius - (at.point - self.point).dot(self.normal), -at.velocity.dot(self.normal))
+    /// A contact with a fixed plane through `point` (m) with unit outward
+    /// `normal`, for a sphere of `radius` m.
+    pub fn fixed(point: DVec3, normal: DVec3, radius: f64, law: ImpactLaw) -> Self {
+        SphereContact { point, normal, velocity: DVec3::ZERO, time: 0.0, radius, law }
     }
 
-    /// The normal force the plane puts on the sphere, N (≥ 0).
-    pub fn normal_force(&self, at: &PointState) -> f64 {
-        let (d, r) = self.depth(at);
+    /// Penetration (m, > 0 inside) and its rate (m/s, > 0 approaching) at
+    /// time `t` (s) and the point's state.
+    pub fn depth(&self, t: f64, at: &PointState) -> (f64, f64) {
+        let plane = self.point + self.velocity * (t - self.time);
+        (self.radius - (at.point - plane).dot(self.normal), -(at.velocity - self.velocity).dot(self.normal))
+    }
+
+    /// The normal force the plane puts on the sphere at time `t` (s), N
+    /// (≥ 0).
+    pub fn normal_force(&self, t: f64, at: &PointState) -> f64 {
+        let (d, r) = self.depth(t, at);
         self.law.force(d, r).0
     }
 }
 
 impl ForceElement for SphereContact {
-    fn wrench(&self, _t: f64, at: &PointState) -> PointWrench {
-        let (depth, rate) = self.depth(at);
+    fn wrench(&self, t: f64, at: &PointState) -> PointWrench {
+        let (depth, rate) = self.depth(t, at);
         let (f, k, c) = self.law.force(depth, rate);
         if f == 0.0 {
             return PointWrench::default();
@@ -163,7 +177,11 @@ impl ForceElement for SphereContact {
         w
     }
 
-    fn energy(&self, _t: f64, at: &PointState) -> f64 {
-        self.law.potential(self.depth(at).0)
+    fn energy(&self, t: f64, at: &PointState) -> f64 {
+        self.law.potential(self.depth(t, at).0)
+    }
+
+    fn contact_force(&self, t: f64, at: &PointState) -> Option<f64> {
+        Some(self.normal_force(t, at))
     }
 }

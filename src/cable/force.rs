@@ -74,6 +74,13 @@ pub trait ForceElement: Send + Sync {
     fn energy(&self, _t: f64, _at: &PointState) -> f64 {
         0.0
     }
+
+    /// The normal force (N, ≥ 0) if the element is a contact
+    /// ([`SphereContact`](super::SphereContact)), `None` otherwise: what a
+    /// cable's `contact_force` reports.
+    fn contact_force(&self, _t: f64, _at: &PointState) -> Option<f64> {
+        None
+    }
 }
 
 /// A force element on a link of a chain.

@@ -75,7 +75,9 @@
 //!   Stable roughly while `k·h²/m ≲ 1` with `k = EA/L_e` (see
 //!   [`Coupling::explicit_ratios`]).
 
+mod contact;
 mod explicit;
+pub use self::contact::{CableContact, Contacts};
 
 #[cfg_attr(not(any(feature = "app", feature = "sim")), allow(unused_imports))]
 pub(crate) use self::explicit::{follow, rail_motor, reaction, BodySample};
@@ -145,6 +147,10 @@ pub struct CableSpec {
     /// the adapter knows them exactly (a scenario's f64 values); `None`:
     /// read from rapier (f32).
     pub exact: [Option<LumpedBody>; 2],
+    /// Contact of the rope's elements with rapier's colliders (`None`:
+    /// the rope passes through them). Grafted ropes take the setting of the
+    /// cable that carries their hub.
+    pub contact: Option<CableContact>,
 }
 
 /// How a body is coupled to a cable end (see the module docs).
@@ -344,6 +350,10 @@ pub struct CoupledCable {
     pub followers: Vec<Follower>,
     /// Number of constant loads on the chain (the per-step loads follow).
     fixed_loads: usize,
+    /// Contact of the rope's elements with rapier's colliders.
+    pub contact: Option<CableContact>,
+    /// Number of force elements that are not this step's contacts.
+    fixed_forces: usize,
     /// Stopped after a failed step.
     pub failed: bool,
     /// The failure of this step's advance (time of the failing sub-step),
@@ -653,16 +663,19 @@ impl Coupling {
     }
 
     /// Phase 1 over every cable: [`step_cables`].
+    #[allow(clippy::too_many_arguments)]
     pub fn step(
         &mut self,
         bodies: &mut rp::RigidBodySet,
+        colliders: &rp::ColliderSet,
         joints: &mut rp::ImpulseJointSet,
         h: f64,
         substeps: u32,
         inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
+        motions: &dyn Fn(rp::RigidBodyHandle) -> Option<BodyMotion>,
     ) -> Vec<(usize, f64, CableError)> {
         let mut all: Vec<&mut CoupledCable> = self.cables.iter_mut().collect();
-        step_cables(&mut all, bodies, joints, h, substeps, inputs, &OneByOne)
+        step_cables(&mut all, bodies, Contacts { colliders, motions }, joints, h, substeps, inputs, &OneByOne)
     }
 
     /// Phase 2 over every cable: [`after_rapier`].
@@ -948,7 +961,8 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         .collect();
     let cable = Cable::new(model, spec.scheme.clone()).map_err(|e| CouplingError::Cable(Box::new(e)))?;
     let fixed_loads = cable.model.chain.loads().len();
-    Ok(CoupledCable { cable, roles, parts, carried, followers, fixed_loads, failed: false, advance_failure: None })
+    let fixed_forces = cable.model.chain.forces().len();
+    Ok(CoupledCable { cable, roles, parts, carried, followers, fixed_loads, contact: spec.contact, fixed_forces, failed: false, advance_failure: None })
 }
 
 /// Runs a job on every cable of a step: one after the other, or at once on
@@ -988,6 +1002,7 @@ impl ForEachCable for OneByOne {
 pub fn step_cables(
     cables: &mut [&mut CoupledCable],
     bodies: &mut rp::RigidBodySet,
+    contacts: Contacts<'_>,
     joints: &mut rp::ImpulseJointSet,
     h: f64,
     substeps: u32,
@@ -1053,6 +1068,15 @@ pub fn step_cables(
             if force != DVec3::ZERO || moment != DVec3::ZERO {
                 cc.cable.model.chain.loads_mut().push(LinkLoad { link, force, local_point, moment });
             }
+        }
+    }
+    // Contacts of the rope elements with rapier's colliders, frozen for the
+    // step (the cable's own bodies excluded).
+    for cc in cables.iter_mut().filter(|c| !c.failed) {
+        contact::clear(&mut cc.cable, cc.fixed_forces);
+        if let Some(settings) = cc.contact {
+            let own: Vec<rp::RigidBodyHandle> = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).collect();
+            contact::add_contacts(&mut cc.cable, &settings, &contacts, bodies, &own, h);
         }
     }
     // The cables' own solves: independent of each other and of rapier (every

@@ -135,6 +135,14 @@ pub struct CableDescriptor {
     /// message at time 0). For a cable whose rope is grafted onto another's
     /// chain (a sling leg), the carrying cable's setting counts.
     pub static_start: Option<u32>,
+    /// Contact of the rope with rapier's colliders (default `true`): its
+    /// nodes, and its elements over edges and curved surfaces, are pushed
+    /// out of the colliders of fixed and kinematic bodies (not the cable's
+    /// own) by steel-on-steel Hertz contact
+    /// ([`CableContact::steel`](crate::coupling::CableContact::steel)),
+    /// inside the implicit solve. Frictionless for now; dynamic bodies
+    /// pass through the rope for now.
+    pub contacts: bool,
 }
 
 /// A constant point load on a cable (world frame).
@@ -235,6 +243,7 @@ impl CableDescriptor {
             loads: Vec::new(),
             stress_free: false,
             static_start: None,
+            contacts: true,
         }
     }
 
@@ -296,6 +305,13 @@ impl CableDescriptor {
     /// default: a rope cannot push).
     pub fn tension_only(mut self, yes: bool) -> Self {
         self.tension_only = yes;
+        self
+    }
+
+    /// Contact with rapier's colliders on (`true`, the default) or off (the
+    /// rope passes through them); see [`CableDescriptor::contacts`].
+    pub fn contacts(mut self, yes: bool) -> Self {
+        self.contacts = yes;
         self
     }
 

@@ -356,6 +356,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
         d.shear_stiffness = c.shear_stiffness;
         d.damping = c.damping;
         d.tension_only = c.tension_only;
+        d.contacts = c.contacts;
         d.scheme = scheme.clone();
         d.stress_free = c.stress_free;
         d.static_start = sim.statics.then_some(sim.static_load_steps);

@@ -5,7 +5,9 @@
 use super::components::{BodyExact, CableAnchor, CableDescriptor, CableError, CableErrorKind, CableExact, CableRopeOf, CableSim, CableState, CarriedBody};
 use super::CableSettings;
 use crate::cable::{LumpedBody, RopeBuilder};
-use crate::coupling::{self, rail_motor, Attach, BodyInputs, Built, CableSpec, CoupledCable, CouplingError, ForEachCable, OneByOne, Role};
+use crate::coupling::{
+    self, rail_motor, Attach, BodyInputs, BodyMotion, Built, CableContact, CableSpec, Contacts, CoupledCable, CouplingError, ForEachCable, OneByOne, Role,
+};
 use crate::sim::{STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
@@ -144,7 +146,12 @@ pub(crate) fn init_cables(
             }
         }
         let exact_ends = [lumped(sb), lumped(eb)];
-        specs.push(CableSpec { rope, path, start, end, scheme: d.scheme.clone(), exact: exact_ends });
+        let contact = if d.contacts {
+            CableContact::steel(d.material.diameter(), d.material.section().linear_density * d.length / d.segments.max(1) as f64).ok()
+        } else {
+            None
+        };
+        specs.push(CableSpec { rope, path, start, end, scheme: d.scheme.clone(), exact: exact_ends, contact });
         owners.push((entity, [sb, eb], d.loads.clone(), d.static_start));
     }
     let others: Vec<&CoupledCable> = existing.iter().map(|(_, s)| &s.coupled).collect();
@@ -288,6 +295,7 @@ pub(crate) fn step_cables(
     mut ctx: WriteRapierContext,
     inputs: Query<InputComponents>,
     handles: Query<&RapierRigidBodyHandle>,
+    exact_bodies: Query<(&RapierRigidBodyHandle, &BodyExact)>,
     joints: Query<&ImpulseJoint>,
     ropes: Query<(Entity, &CableRopeOf)>,
     settings: Res<CableSettings>,
@@ -358,9 +366,13 @@ pub(crate) fn step_cables(
     }
     let mut refs: Vec<&mut CoupledCable> = list.iter_mut().map(|(_, s)| &mut s.coupled).collect();
     let each: &dyn ForEachCable = if settings.parallel { &OnTaskPool } else { &OneByOne };
+    // Exact motions of the bodies that carry `BodyExact` (a scenario's),
+    // for the contacts' geometry, as `cablesim` has them.
+    let motions: HashMap<RigidBodyHandle, BodyMotion> = exact_bodies.iter().filter_map(|(h, x)| x.motion.clone().map(|m| (h.0, m))).collect();
     let failures = coupling::step_cables(
         &mut refs,
         &mut ctx.rigidbody_set.bodies,
+        Contacts { colliders: &ctx.colliders.colliders, motions: &|b| motions.get(&b).cloned() },
         &mut ctx.joints.impulse_joints,
         dt,
         settings.substeps,

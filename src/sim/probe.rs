@@ -69,6 +69,7 @@ pub(crate) fn probe(src: &dyn ProbeSource, p: &scenario::Probe) -> Probe {
                 Quantity::Position => Probe::Vector(c.point_at(s).0),
                 Quantity::Velocity => Probe::Vector(c.point_at(s).1),
                 Quantity::Tension => Probe::Scalar(c.tension_at(s)),
+                Quantity::ContactForce => Probe::Scalar(c.contact_force()),
                 _ => Probe::Scalar(c.stretched_length()),
             }
         }

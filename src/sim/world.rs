@@ -116,8 +116,9 @@
 //!
 //! ## Refused
 //! Anything this runner would simulate wrongly is reported with the file
-//! position (exit status 2): winches, wind and water, `contact_force`
-//! probes, winch probes, a cable `end` clamped to a spinning body or to a
+//! position (exit status 2): winches, wind and water, a body's
+//! `contact_force` probe (a cable's is the sum of its contacts' normal
+//! forces), winch probes, a cable `end` clamped to a spinning body or to a
 //! dynamic rapier body (the end spring's orientation hold has a fixed
 //! target), a `force` probe on an undriven rapier joint, and joints whose
 //! anchors are not the same point at t = 0. Cables do not touch colliders
@@ -127,7 +128,7 @@ use super::probe::Probe;
 use super::rapier::RapierWorld;
 use super::{STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};
 use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
-use crate::coupling::{rail_motor, velocity_drive_motor, Attach, BodyInputs, BodyMotion, CableSpec, Coupling, CouplingError, Role};
+use crate::coupling::{rail_motor, velocity_drive_motor, Attach, BodyInputs, BodyMotion, CableContact, CableSpec, Coupling, CouplingError, Role};
 use crate::integrate::{Scheme, SchemeParams, Substeps};
 use crate::scenario::{self, BodyKind, CableEnd, Drive, Location, ProbeTarget, Quantity, Scenario, Shape};
 use glam::{DMat3, DVec3};
@@ -276,6 +277,9 @@ pub struct World {
     core: Coupling,
     names: Vec<CableNames>,
     rapier: RapierWorld,
+    /// The exact motion of each fixed or kinematic body (cable ends and
+    /// contacts read it instead of rapier's f32 pose).
+    motions: Motions,
     /// Simulation time, s.
     pub time: f64,
     /// Frames stepped.
@@ -347,6 +351,17 @@ fn cable_spec(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, rapier: &Rapi
         end: attach(&c.end),
         scheme: scheme.clone(),
         exact: [exact(&c.start), exact(&c.end)],
+        contact: if c.contacts { CableContact::steel(c.diameter, c.linear_density * c.length / c.segments.max(1) as f64).ok() } else { None },
+    }
+}
+
+/// The fixed and kinematic bodies' exact motions (closures: printed by
+/// count).
+struct Motions(HashMap<rapier3d::prelude::RigidBodyHandle, BodyMotion>);
+
+impl std::fmt::Debug for Motions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Motions({} bodies)", self.0.len())
     }
 }
 
@@ -364,7 +379,8 @@ impl World {
             return Err(unsupported(Location { line: 0, col: 0 }, "[environment] wind / water".into()));
         }
         for p in &scenario.probes {
-            if matches!(p.quantity, Quantity::ContactForce) || matches!(p.target, ProbeTarget::Winch(_)) {
+            let body_contact = matches!(p.quantity, Quantity::ContactForce) && !matches!(p.target, ProbeTarget::Cable(_));
+            if body_contact || matches!(p.target, ProbeTarget::Winch(_)) {
                 return Err(unsupported(p.location, format!("probe `{}` ({})", p.name, p.quantity.name())));
             }
         }
@@ -525,7 +541,7 @@ impl World {
                 ));
             }
         }
-        Ok(World { scenario, core, names, rapier, time: 0.0, steps: 0, substeps, warnings })
+        Ok(World { scenario, core, names, rapier, motions: Motions(motions), time: 0.0, steps: 0, substeps, warnings })
     }
 
     /// Advances the world by one frame `dt` in `substeps` sub-steps, each:
@@ -553,7 +569,15 @@ impl World {
                     _ => {}
                 }
             }
-            let failures = self.core.step(&mut self.rapier.pw.bodies, &mut self.rapier.pw.impulse_joints, h, 1, &|_| BodyInputs::default());
+            let failures = self.core.step(
+                &mut self.rapier.pw.bodies,
+                &self.rapier.pw.colliders,
+                &mut self.rapier.pw.impulse_joints,
+                h,
+                1,
+                &|_| BodyInputs::default(),
+                &|b| self.motions.0.get(&b).cloned(),
+            );
             if let Some((i, time, source)) = failures.into_iter().next() {
                 return Err(SimError::Diverged { cable: self.names[i].label(), time, source: Box::new(source) });
             }

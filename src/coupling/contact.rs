@@ -1,0 +1,212 @@
+//! Rope elements against rapier's colliders (issue 12, second part): at the
+//! start of each step every element of a cable with contacts on is tested
+//! as a capsule of the rope's radius against the colliders near it; each
+//! collider within the speculative margin gets a [`SphereContact`] on the
+//! element at the closest point, frozen for the step (its tangent plane
+//! there), which pushes only once the rope reaches it. Fixed and
+//! kinematic colliders only, for now (see `add_contacts`).
+//!
+//! The nearest points come from parry's point projection (f32) in the
+//! collider's own frame, with the face's own normal where there is one:
+//! the rope's points are moved into that frame in f64 first, so a flat
+//! face's plane comes out as the shape's own constant (a cuboid's half
+//! extent, exact in f32) step after step, and a resting rope does not see
+//! its ground jitter by the f32 rounding of world coordinates (1e-6 m at
+//! 10 m, against Hertz depths of 1e-6 m). Measured and rejected: parry's
+//! capsule–shape `contact` query (GJK/EPA for a capsule on a cuboid) gave
+//! face normals tilted by up to 1.2e-3 rad and contact points anywhere
+//! along an element lying flat, and the rope on the ground failed at its
+//! first contact step.
+
+use super::BodyMotion;
+use crate::cable::{Cable, ContactError, ImpactLaw, SphereContact};
+use glam::{DMat3, DVec3};
+use rapier3d::prelude as rp;
+use std::sync::Arc;
+
+/// Contact settings of one cable: its elements against rapier's colliders.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CableContact {
+    /// The normal law.
+    pub law: ImpactLaw,
+}
+
+impl CableContact {
+    /// Steel wire rope on steel: Hertz (`ImpactLaw::hertz`) with
+    /// E* = 1.154e11 Pa (E = 210 GPa, ν = 0.3 on both sides) and R* the
+    /// rope's radius (a flat or larger obstacle), damping ramped in over
+    /// 1e-5 m to `C_max = 2 √(k m_e)`, critical for an element of mass
+    /// `element_mass` (kg) on the contact's stiffness `k` at that depth.
+    /// `diameter` m.
+    pub fn steel(diameter: f64, element_mass: f64) -> Result<Self, ContactError> {
+        let e_star = 1.0 / (2.0 * (1.0 - 0.09) / 210e9);
+        let depth: f64 = 1e-5;
+        let r = 0.5 * diameter;
+        let k = 1.5 * (4.0 / 3.0) * e_star * r.sqrt() * depth.sqrt();
+        let c = 2.0 * (k * element_mass.max(0.0)).sqrt();
+        Ok(CableContact { law: ImpactLaw::hertz(e_star, r, c, depth)? })
+    }
+}
+
+/// What the rope elements may touch: rapier's colliders, and the exact
+/// (f64) motion of the fixed and kinematic bodies that have one (a
+/// scenario's bodies, in both runners), used instead of rapier's f32 pose
+/// so that `cablesim` and a Bevy app find the same contacts to the bit.
+#[derive(Clone, Copy)]
+pub struct Contacts<'a> {
+    /// The colliders.
+    pub colliders: &'a rp::ColliderSet,
+    /// A body's exact motion, if the adapter knows it.
+    pub motions: &'a dyn Fn(rp::RigidBodyHandle) -> Option<BodyMotion>,
+}
+
+/// The surface point of `shape` nearest to `p` (collider frame, m), its
+/// outward unit normal there, and the signed distance of `p` along it
+/// (negative inside). A face's normal is its own (a cuboid's face normal
+/// exactly); elsewhere the direction from the surface point to `p`.
+fn nearest(shape: &dyn rp::Shape, p: DVec3) -> Option<(DVec3, DVec3, f64)> {
+    let (proj, feature) = shape.project_local_point_and_get_feature(p.as_vec3());
+    let q = proj.point.as_dvec3();
+    let normal = match shape.feature_normal_at_point(feature, proj.point) {
+        Some(n) => n.as_dvec3().normalize(),
+        None => {
+            let d = p - q;
+            if proj.is_inside {
+                -d.normalize()
+            } else {
+                d.normalize()
+            }
+        }
+    };
+    normal.is_finite().then(|| (q, normal, (p - q).dot(normal)))
+}
+
+/// Adds this step's contacts of every rope of `cable` against the
+/// fixed and kinematic colliders of `world` (sensors, dynamic bodies and
+/// the bodies in `exclude` skipped), each as a [`SphereContact`] force
+/// element. Every node within the speculative margin of a collider gets one
+/// (on the tangent plane at the collider's nearest point), and so does an
+/// element whose nearest point to the collider lies inside it, nearer
+/// than both its nodes (a rope over an edge). `h` (s) sets the margin:
+/// `2 h |v| + h² |g|` plus the rope's radius beyond the rope's surface at
+/// the step's start (`v` the faster of the element's nodes).
+pub(crate) fn add_contacts(
+    cable: &mut Cable,
+    contact: &CableContact,
+    world: &Contacts<'_>,
+    bodies: &rp::RigidBodySet,
+    exclude: &[rp::RigidBodyHandle],
+    h: f64,
+) {
+    let radius = 0.5 * cable.model.diameter;
+    let gravity = cable.model.chain.gravity.length();
+    for rope in 0..cable.ropes() {
+        let Some(view) = cable.rope(rope) else {
+            continue;
+        };
+        let (nodes, velocities) = (view.nodes(), view.node_velocities());
+        let element_length = view.layout().element_length;
+        let n = nodes.len().saturating_sub(1);
+        // Speculative reach of each element beyond the rope's surface:
+        // what it may travel in the step (twice its speed, plus gravity's
+        // fall from rest), plus one radius.
+        let reach: Vec<f64> = (0..n).map(|i| radius + 2.0 * h * velocities[i].length().max(velocities[i + 1].length()) + h * h * gravity).collect();
+        let mut hits: Vec<(f64, SphereContact)> = Vec::new();
+        for (_, collider) in world.colliders.iter() {
+            // Dynamic bodies are left out for now: their motion is frozen
+            // over the step here, so a falling ball would squeeze the rope
+            // into the ground and fail the solve (measured: a 50 kg ball at
+            // 4.4 m/s onto a rope lying on the ground). They need their
+            // inertia in the rope's solve, as the carried bodies have.
+            let dynamic = collider.parent().and_then(|p| bodies.get(p)).is_some_and(|rb| rb.is_dynamic());
+            if collider.is_sensor() || dynamic || collider.parent().is_some_and(|p| exclude.contains(&p)) {
+                continue;
+            }
+            let aabb = collider.compute_aabb();
+            let (cmin, cmax) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
+            let now = cable.time();
+            let parent = collider.parent().and_then(|p| bodies.get(p));
+            let exact = collider.parent().and_then(|p| (world.motions)(p)).map(|m| m(now));
+            // The collider's pose (its body's exact one when known, with the
+            // collider's own offset on it), and the surface's velocity at a
+            // point at the step's start.
+            let (t, r) = match (&exact, collider.position_wrt_parent()) {
+                (Some(b), local) => {
+                    let (lt, lr) =
+                        local.map_or((DVec3::ZERO, DMat3::IDENTITY), |l| (l.translation.as_dvec3(), DMat3::from_quat(l.rotation.as_dquat().normalize())));
+                    (b.position + b.rotation * lt, b.rotation * lr)
+                }
+                (None, _) => {
+                    let pose = collider.position();
+                    (pose.translation.as_dvec3(), DMat3::from_quat(pose.rotation.as_dquat().normalize()))
+                }
+            };
+            let surface_velocity = |q: DVec3| match (&exact, parent) {
+                (Some(b), _) => b.velocity + b.angular_velocity.cross(q - b.position),
+                (None, Some(rb)) => rb.velocity_at_point(q.as_vec3()).as_dvec3(),
+                (None, None) => DVec3::ZERO,
+            };
+            let shape = collider.shape();
+            let local = |p: DVec3| r.transpose() * (p - t);
+            let mut add = |s: f64, (q, normal, _): (DVec3, DVec3, f64)| {
+                let point = t + r * q;
+                hits.push((s, SphereContact { point, normal: r * normal, velocity: surface_velocity(point), time: now, radius, law: contact.law }));
+            };
+            let near = |i: usize| {
+                let (a, b) = (nodes[i], nodes[i + 1]);
+                let pad = DVec3::splat(radius + reach[i]);
+                !((a.min(b) - pad).cmpgt(cmax).any() || (a.max(b) + pad).cmplt(cmin).any())
+            };
+            // Nodes.
+            for k in 0..=n {
+                let reach_k = reach[k.min(n.saturating_sub(1))].max(if k > 0 { reach[k - 1] } else { 0.0 });
+                let touches = (k < n && near(k)) || (k > 0 && near(k - 1));
+                if !touches {
+                    continue;
+                }
+                if let Some(hit) = nearest(shape, local(nodes[k])).filter(|hit| hit.2 - radius <= reach_k) {
+                    add(k as f64 * element_length, hit);
+                }
+            }
+            // Element interiors nearer than both their nodes.
+            for i in (0..n).filter(|&i| near(i)) {
+                let (a, b) = (local(nodes[i]), local(nodes[i + 1]));
+                let dist = |f: f64| nearest(shape, a.lerp(b, f)).map_or(f64::INFINITY, |hit| hit.2);
+                // A quarter-point below both ends starts a search around it
+                // (the distance to a convex shape is convex along the
+                // element); a straight run along a face has none.
+                let ends = dist(0.0).min(dist(1.0));
+                let Some((best, _)) =
+                    [0.25, 0.5, 0.75].map(|f| (f, dist(f))).into_iter().filter(|(_, d)| *d < ends - 1e-3 * radius).min_by(|x, y| x.1.total_cmp(&y.1))
+                else {
+                    continue;
+                };
+                let (mut lo, mut hi) = (best - 0.25, best + 0.25);
+                for _ in 0..24 {
+                    let (m1, m2) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+                    if dist(m1) <= dist(m2) {
+                        hi = m2;
+                    } else {
+                        lo = m1;
+                    }
+                }
+                let f = 0.5 * (lo + hi);
+                let d = dist(f);
+                if f > 0.02 && f < 0.98 && d < ends - 1e-3 * radius && d - radius <= reach[i] {
+                    if let Some(hit) = nearest(shape, a.lerp(b, f)) {
+                        add((i as f64 + f) * element_length, hit);
+                    }
+                }
+            }
+        }
+        for (s, element) in hits {
+            let added = cable.add_force_element(rope, s, Arc::new(element));
+            debug_assert!(added, "rope {rope} exists");
+        }
+    }
+}
+
+/// Drops the force elements past `keep` (the last step's contacts).
+pub(crate) fn clear(cable: &mut Cable, keep: usize) {
+    cable.model.chain.forces_mut().truncate(keep);
+}
