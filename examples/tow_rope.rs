@@ -9,8 +9,9 @@
 //! 10 coupled sub-steps per 1/60 s step (`with_coupled_substeps`).
 //!
 //! (Two things found while writing it, reported to the core: a carried
-//! body resting on the ground sank into it and tipped over, and the
-//! cable cannot carry a body with `LockedAxes`; hence the joint.)
+//! body resting on the ground sank into it and tipped over (fixed since:
+//! its corners' contacts are in the cable's solve), and the cable cannot
+//! carry a body with `LockedAxes`; hence the joint.)
 //!
 //! **Known problem** (the rope solve, reported): steering for long makes
 //! the cable stop with "Newton did not converge" (headless, full lock from
@@ -27,12 +28,13 @@
 //! * mouse drag: orbit the camera; mouse wheel: zoom;
 //! * R: reset (both vehicles and the rope respawned at rest).
 //!
-//! **Limitation**: the rope does not touch the ground (rope–ground
-//! contact is a later issue): a slack rope would hang through it. So the
-//! hitches are high (1.6 m, a tow bar on a raised hitch), the rope short,
-//! the truck cannot reverse, and the trailer brakes hard (friction 0.35
-//! when the rope is slack, like a driver on the brake) so that it does
-//! not roll up to the truck: the rope sags at most about 1.2 m.
+//! **Limitation**: the rope now rests on the ground where it reaches it
+//! (frictionless rope–ground contact, issue 12), but it was designed
+//! before that: the hitches are high (1.6 m, a tow bar on a raised hitch),
+//! the rope short, the truck cannot reverse, and the trailer brakes hard
+//! (friction 0.35 when the rope is slack, like a driver on the brake) so
+//! that it does not roll up to the truck: the rope sags at most about
+//! 1.2 m and does not touch the ground.
 //!
 //! The HUD shows the rope's tension (largest over the rope) and both
 //! vehicles' speeds.

@@ -111,7 +111,7 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 18] = [
+const COMPARED: [&str; 19] = [
     "axial_bounce",
     "bend_45",
     "boom_hoist",
@@ -121,6 +121,7 @@ const COMPARED: [&str; 18] = [
     "damped_drop",
     "hanging_chain",
     "hanging_payload",
+    "payload_set_down",
     "pendulum_60deg",
     "perf_swing_1000",
     "rope_on_ground",
@@ -159,6 +160,7 @@ same_rows!(
     damped_drop,
     hanging_chain,
     hanging_payload,
+    payload_set_down,
     pendulum_60deg,
     perf_swing_1000,
     rope_on_ground,

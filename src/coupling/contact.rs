@@ -18,8 +18,8 @@
 //! along an element lying flat, and the rope on the ground failed at its
 //! first contact step.
 
-use super::BodyMotion;
-use crate::cable::{Cable, ContactError, ImpactLaw, SphereContact};
+use super::{BodyMotion, CarriedLink};
+use crate::cable::{AttachedForce, BaseState, Cable, ContactError, ImpactLaw, SphereContact};
 use glam::{DMat3, DVec3};
 use rapier3d::prelude as rp;
 use std::sync::Arc;
@@ -58,6 +58,48 @@ pub struct Contacts<'a> {
     pub colliders: &'a rp::ColliderSet,
     /// A body's exact motion, if the adapter knows it.
     pub motions: &'a dyn Fn(rp::RigidBodyHandle) -> Option<BodyMotion>,
+}
+
+/// A collider's pose relative to its body (identity without a body).
+fn offset(collider: &rp::Collider) -> (DVec3, DMat3) {
+    collider.position_wrt_parent().map_or((DVec3::ZERO, DMat3::IDENTITY), |l| (l.translation.as_dvec3(), DMat3::from_quat(l.rotation.as_dquat().normalize())))
+}
+
+/// An obstacle collider at the step's start: its frame (its body's exact
+/// pose when the adapter knows its motion, with the collider's offset on
+/// it; else rapier's f32 pose) and how its surface moves.
+struct Obstacle<'a> {
+    origin: DVec3,
+    rotation: DMat3,
+    exact: Option<BaseState>,
+    body: Option<&'a rp::RigidBody>,
+}
+
+impl<'a> Obstacle<'a> {
+    fn new(collider: &rp::Collider, world: &Contacts<'_>, bodies: &'a rp::RigidBodySet, now: f64) -> Self {
+        let body = collider.parent().and_then(|p| bodies.get(p));
+        let exact = collider.parent().and_then(|p| (world.motions)(p)).map(|m| m(now));
+        let (origin, rotation) = match &exact {
+            Some(b) => {
+                let (lt, lr) = offset(collider);
+                (b.position + b.rotation * lt, b.rotation * lr)
+            }
+            None => {
+                let pose = collider.position();
+                (pose.translation.as_dvec3(), DMat3::from_quat(pose.rotation.as_dquat().normalize()))
+            }
+        };
+        Obstacle { origin, rotation, exact, body }
+    }
+
+    /// Velocity of the obstacle's surface at world point `q`, m/s.
+    fn surface_velocity(&self, q: DVec3) -> DVec3 {
+        match (&self.exact, self.body) {
+            (Some(b), _) => b.velocity + b.angular_velocity.cross(q - b.position),
+            (None, Some(rb)) => rb.velocity_at_point(q.as_vec3()).as_dvec3(),
+            (None, None) => DVec3::ZERO,
+        }
+    }
 }
 
 /// The surface point of `shape` nearest to `p` (collider frame, m), its
@@ -105,8 +147,20 @@ pub(crate) fn add_contacts(
             continue;
         };
         let (nodes, velocities) = (view.nodes(), view.node_velocities());
-        let element_length = view.layout().element_length;
+        let layout = *view.layout();
+        let element_length = layout.element_length;
         let n = nodes.len().saturating_sub(1);
+        // Nodes held by a pin, a clamp or an anchor spring, or at a carried
+        // body, get no contact: the rope is fastened there, often on a
+        // collider's face (a hook under a beam), and a contact would fight
+        // the fastening (measured: the hanging_payload demo's rope, pinned
+        // to the gantry beam's underside, pulled 337 kN).
+        let first_link = layout.element_link(0);
+        let last_link = layout.element_link(layout.elements - 1);
+        let anchored = |link: usize| cable.model.chain.anchors().iter().any(|a| a.link == link);
+        let held_start = !layout.free_start || anchored(first_link);
+        let held_end = layout.end_body.is_some() || anchored(last_link);
+        let (held_first, held_last) = if view.reversed() { (held_end, held_start) } else { (held_start, held_end) };
         // Speculative reach of each element beyond the rope's surface:
         // what it may travel in the step (twice its speed, plus gravity's
         // fall from rest), plus one radius.
@@ -125,32 +179,13 @@ pub(crate) fn add_contacts(
             let aabb = collider.compute_aabb();
             let (cmin, cmax) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
             let now = cable.time();
-            let parent = collider.parent().and_then(|p| bodies.get(p));
-            let exact = collider.parent().and_then(|p| (world.motions)(p)).map(|m| m(now));
-            // The collider's pose (its body's exact one when known, with the
-            // collider's own offset on it), and the surface's velocity at a
-            // point at the step's start.
-            let (t, r) = match (&exact, collider.position_wrt_parent()) {
-                (Some(b), local) => {
-                    let (lt, lr) =
-                        local.map_or((DVec3::ZERO, DMat3::IDENTITY), |l| (l.translation.as_dvec3(), DMat3::from_quat(l.rotation.as_dquat().normalize())));
-                    (b.position + b.rotation * lt, b.rotation * lr)
-                }
-                (None, _) => {
-                    let pose = collider.position();
-                    (pose.translation.as_dvec3(), DMat3::from_quat(pose.rotation.as_dquat().normalize()))
-                }
-            };
-            let surface_velocity = |q: DVec3| match (&exact, parent) {
-                (Some(b), _) => b.velocity + b.angular_velocity.cross(q - b.position),
-                (None, Some(rb)) => rb.velocity_at_point(q.as_vec3()).as_dvec3(),
-                (None, None) => DVec3::ZERO,
-            };
+            let obstacle = Obstacle::new(collider, world, bodies, now);
+            let (t, r) = (obstacle.origin, obstacle.rotation);
             let shape = collider.shape();
             let local = |p: DVec3| r.transpose() * (p - t);
             let mut add = |s: f64, (q, normal, _): (DVec3, DVec3, f64)| {
                 let point = t + r * q;
-                hits.push((s, SphereContact { point, normal: r * normal, velocity: surface_velocity(point), time: now, radius, law: contact.law }));
+                hits.push((s, SphereContact { point, normal: r * normal, velocity: obstacle.surface_velocity(point), time: now, radius, law: contact.law }));
             };
             let near = |i: usize| {
                 let (a, b) = (nodes[i], nodes[i + 1]);
@@ -158,7 +193,7 @@ pub(crate) fn add_contacts(
                 !((a.min(b) - pad).cmpgt(cmax).any() || (a.max(b) + pad).cmplt(cmin).any())
             };
             // Nodes.
-            for k in 0..=n {
+            for k in (0..=n).filter(|&k| !((k == 0 && held_first) || (k == n && held_last))) {
                 let reach_k = reach[k.min(n.saturating_sub(1))].max(if k > 0 { reach[k - 1] } else { 0.0 });
                 let touches = (k < n && near(k)) || (k > 0 && near(k - 1));
                 if !touches {
@@ -204,6 +239,128 @@ pub(crate) fn add_contacts(
             debug_assert!(added, "rope {rope} exists");
         }
     }
+}
+
+/// The contact law of a carried body's touch points: steel on steel,
+/// Hertz with R* = 10 mm (a corner or an edge rounded to 1 cm), damping
+/// ramped in over 1e-5 m to the critical damping of a quarter of the
+/// body's mass `mass` (kg) on the contact's stiffness there (four corners
+/// share a resting box).
+fn body_law(mass: f64) -> Result<ImpactLaw, ContactError> {
+    let e_star = 1.0 / (2.0 * (1.0 - 0.09) / 210e9);
+    let (r, depth): (f64, f64) = (0.01, 1e-5);
+    let k = 1.5 * (4.0 / 3.0) * e_star * r.sqrt() * depth.sqrt();
+    ImpactLaw::hertz(e_star, r, 2.0 * (k * 0.25 * mass.max(0.0)).sqrt(), depth)
+}
+
+/// Points of a collider shape that can touch an obstacle, in the shape's
+/// frame, each with the radius of the sphere around it (m): a ball's centre
+/// with its radius, a capsule's two segment ends with its radius, a
+/// cuboid's eight corners, a cylinder's two rims (16 points each), a
+/// convex polyhedron's vertices. Other shapes: none (they still reach the
+/// chain through rapier's impulse, one step late).
+fn touch_points(shape: &dyn rp::Shape) -> Vec<(DVec3, f64)> {
+    if let Some(b) = shape.as_ball() {
+        return vec![(DVec3::ZERO, b.radius as f64)];
+    }
+    if let Some(c) = shape.as_capsule() {
+        return vec![(c.segment.a.as_dvec3(), c.radius as f64), (c.segment.b.as_dvec3(), c.radius as f64)];
+    }
+    if let Some(c) = shape.as_cuboid() {
+        let e = c.half_extents.as_dvec3();
+        return (0..8)
+            .map(|k| (DVec3::new(if k & 1 == 0 { -e.x } else { e.x }, if k & 2 == 0 { -e.y } else { e.y }, if k & 4 == 0 { -e.z } else { e.z }), 0.0))
+            .collect();
+    }
+    if let Some(c) = shape.as_cylinder() {
+        let (r, h) = (c.radius as f64, c.half_height as f64);
+        return (0..32)
+            .map(|k| {
+                let a = std::f64::consts::TAU * (k % 16) as f64 / 16.0;
+                (DVec3::new(r * a.cos(), if k < 16 { -h } else { h }, r * a.sin()), 0.0)
+            })
+            .collect();
+    }
+    if let Some(p) = shape.as_convex_polyhedron() {
+        return p.points().iter().map(|v| (v.as_dvec3(), 0.0)).collect();
+    }
+    Vec::new()
+}
+
+/// Adds this step's contacts of the bodies the chain carries against the
+/// colliders of fixed and kinematic bodies (their own cable's bodies and
+/// sensors left out): each touch point of each of a body's colliders
+/// ([`touch_points`]) within the speculative reach of an obstacle gets a
+/// [`SphereContact`] on the body's link, so a payload set down on the
+/// ground rests on it inside the implicit solve instead of through
+/// rapier's impulse one step late. Returns whether any was added.
+pub(crate) fn add_body_contacts(
+    cable: &mut Cable,
+    carried: &[CarriedLink],
+    world: &Contacts<'_>,
+    bodies: &rp::RigidBodySet,
+    exclude: &[rp::RigidBodyHandle],
+    h: f64,
+) -> bool {
+    let gravity = cable.model.chain.gravity.length();
+    let now = cable.time();
+    let mut hits: Vec<AttachedForce> = Vec::new();
+    for c in carried {
+        let Some(rb) = bodies.get(c.body) else {
+            continue;
+        };
+        let Ok(law) = body_law(c.mass) else {
+            continue;
+        };
+        // The body's pose and velocity in the chain (its origin, rotation,
+        // origin velocity, angular velocity).
+        let (p, r, v, w) = cable.model.body_state(&c.place);
+        for own in rb.colliders() {
+            let Some(collider) = world.colliders.get(*own) else {
+                continue;
+            };
+            if collider.is_sensor() {
+                continue;
+            }
+            let (lt, lr) = collider
+                .position_wrt_parent()
+                .map_or((DVec3::ZERO, DMat3::IDENTITY), |l| (l.translation.as_dvec3(), DMat3::from_quat(l.rotation.as_dquat().normalize())));
+            let points: Vec<(DVec3, f64)> = touch_points(collider.shape()).into_iter().map(|(q, radius)| (lt + lr * q, radius)).collect();
+            for (_, other) in world.colliders.iter() {
+                let Some(parent) = other.parent() else {
+                    continue;
+                };
+                if other.is_sensor() || exclude.contains(&parent) || bodies.get(parent).is_none_or(|b| b.is_dynamic()) {
+                    continue;
+                }
+                let obstacle = Obstacle::new(other, world, bodies, now);
+                let (t, rot) = (obstacle.origin, obstacle.rotation);
+                let aabb = other.compute_aabb();
+                let (cmin, cmax) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
+                for (q, radius) in &points {
+                    let world_point = p + r * *q;
+                    let speed = (v + w.cross(r * *q)).length();
+                    let reach = 2.0 * h * speed + h * h * gravity + 0.01;
+                    let pad = DVec3::splat(radius + reach);
+                    if (world_point - pad).cmpgt(cmax).any() || (world_point + pad).cmplt(cmin).any() {
+                        continue;
+                    }
+                    let Some((sq, normal, d)) = nearest(other.shape(), rot.transpose() * (world_point - t)) else {
+                        continue;
+                    };
+                    if d - radius > reach {
+                        continue;
+                    }
+                    let point = t + rot * sq;
+                    let element = SphereContact { point, normal: rot * normal, velocity: obstacle.surface_velocity(point), time: now, radius: *radius, law };
+                    hits.push(AttachedForce { link: c.place.link, local_point: c.place.origin + c.place.rotation * *q, element: Arc::new(element) });
+                }
+            }
+        }
+    }
+    let any = !hits.is_empty();
+    cable.model.chain.forces_mut().extend(hits);
+    any
 }
 
 /// Drops the force elements past `keep` (the last step's contacts).

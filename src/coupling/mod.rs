@@ -354,6 +354,10 @@ pub struct CoupledCable {
     pub contact: Option<CableContact>,
     /// Number of force elements that are not this step's contacts.
     fixed_forces: usize,
+    /// Whether this step's contacts include the carried bodies' own with
+    /// fixed or kinematic colliders (then rapier's impulse from those is
+    /// not applied again, see [`after_rapier`]).
+    body_contacts: bool,
     /// Stopped after a failed step.
     pub failed: bool,
     /// The failure of this step's advance (time of the failing sub-step),
@@ -679,9 +683,9 @@ impl Coupling {
     }
 
     /// Phase 2 over every cable: [`after_rapier`].
-    pub fn after_rapier(&mut self, bodies: &mut rp::RigidBodySet, narrow_phase: &rp::NarrowPhase) {
+    pub fn after_rapier(&mut self, bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
         let mut all: Vec<&mut CoupledCable> = self.cables.iter_mut().collect();
-        after_rapier(&mut all, bodies, narrow_phase)
+        after_rapier(&mut all, bodies, colliders, narrow_phase)
     }
 
     /// For every explicit coupling: (cable index, body, `true` at the
@@ -962,7 +966,19 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
     let cable = Cable::new(model, spec.scheme.clone()).map_err(|e| CouplingError::Cable(Box::new(e)))?;
     let fixed_loads = cable.model.chain.loads().len();
     let fixed_forces = cable.model.chain.forces().len();
-    Ok(CoupledCable { cable, roles, parts, carried, followers, fixed_loads, contact: spec.contact, fixed_forces, failed: false, advance_failure: None })
+    Ok(CoupledCable {
+        cable,
+        roles,
+        parts,
+        carried,
+        followers,
+        fixed_loads,
+        contact: spec.contact,
+        fixed_forces,
+        body_contacts: false,
+        failed: false,
+        advance_failure: None,
+    })
 }
 
 /// Runs a job on every cable of a step: one after the other, or at once on
@@ -1074,9 +1090,19 @@ pub fn step_cables(
     // step (the cable's own bodies excluded).
     for cc in cables.iter_mut().filter(|c| !c.failed) {
         contact::clear(&mut cc.cable, cc.fixed_forces);
+        cc.body_contacts = false;
         if let Some(settings) = cc.contact {
-            let own: Vec<rp::RigidBodyHandle> = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).collect();
+            // The cable's own bodies, and a trolley's rail (rapier does not
+            // collide jointed bodies either).
+            let rails = cc.all_roles().filter_map(|(_, r)| match r {
+                Role::Trolley { joint, .. } => joints.get(*joint).map(|j| [j.body1(), j.body2()]),
+                _ => None,
+            });
+            let own: Vec<rp::RigidBodyHandle> = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).chain(rails.flatten()).collect();
             contact::add_contacts(&mut cc.cable, &settings, &contacts, bodies, &own, h);
+            let carried = std::mem::take(&mut cc.carried);
+            cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &carried, &contacts, bodies, &own, h);
+            cc.carried = carried;
         }
     }
     // The cables' own solves: independent of each other and of rapier (every
@@ -1144,15 +1170,28 @@ pub fn step_cables(
 /// gave each carried body (only if one of its colliders has an active
 /// contact) is kept as an impulse for the next step; the body is put on
 /// the cable's pose and velocity.
-pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBodySet, narrow_phase: &rp::NarrowPhase) {
+pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
     for cc in cables.iter_mut() {
         for k in 0..cc.carried.len() {
             let (p, r, v, w) = cc.carried_state(&cc.carried[k]);
+            // Contacts with fixed and kinematic colliders are in the cable's
+            // solve when its carried bodies' contacts are
+            // (`add_body_contacts`): only the others (dynamic bodies) count
+            // then.
+            let handled = |other: rp::ColliderHandle| {
+                cc.body_contacts && colliders.get(other).and_then(|co| co.parent()).and_then(|b| bodies.get(b)).is_some_and(|b| !b.is_dynamic())
+            };
+            let touched = bodies.get(cc.carried[k].body).is_some_and(|rb| {
+                rb.colliders().iter().any(|h| {
+                    narrow_phase
+                        .contact_pairs_with(*h)
+                        .any(|p| p.has_any_active_contact() && !handled(if p.collider1 == *h { p.collider2 } else { p.collider1 }))
+                })
+            });
             let c = &mut cc.carried[k];
             let Some(rb) = bodies.get_mut(c.body) else {
                 continue;
             };
-            let touched = rb.colliders().iter().any(|h| narrow_phase.contact_pairs_with(*h).any(|p| p.has_any_active_contact()));
             if touched && !cc.failed {
                 let (_, r_now) = pose_of(rb);
                 let i_world = r_now * c.inertia * r_now.transpose();

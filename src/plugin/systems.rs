@@ -463,7 +463,7 @@ pub(crate) fn write_bodies(mut cables: Query<(Entity, &mut CableSim)>, mut ctx: 
     let mut list: Vec<(Entity, Mut<CableSim>)> = cables.iter_mut().collect();
     list.sort_by_key(|(e, _)| spawn_order(*e));
     let mut refs: Vec<&mut CoupledCable> = list.iter_mut().map(|(_, s)| &mut s.coupled).collect();
-    coupling::after_rapier(&mut refs, &mut ctx.rigidbody_set.bodies, &ctx.simulation.narrow_phase);
+    coupling::after_rapier(&mut refs, &mut ctx.rigidbody_set.bodies, &ctx.colliders.colliders, &ctx.simulation.narrow_phase);
 }
 
 /// Refreshes [`CableState`] of every cable, and of the ropes grafted onto
