@@ -414,6 +414,10 @@ pub struct CableState {
     pub tensions: Vec<f32>,
     /// Stretched length, m.
     pub stretched_length: f32,
+    /// Sum of the normal forces of the rope's contacts with colliders, N
+    /// (its weight, for a rope lying on the ground;
+    /// [`CableDescriptor::contacts`]).
+    pub contact_force: f32,
     /// Kinetic + gravitational + elastic energy of the cable's chain, J (for
     /// a [`CableRopeOf`] rope: of the whole chain it is solved in).
     pub energy: f64,

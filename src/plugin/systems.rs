@@ -476,6 +476,7 @@ pub(crate) fn readout(mut cables: Query<(&CableSim, &mut CableState)>, mut ropes
         st.nodes = r.nodes().iter().map(|p| p.as_vec3()).collect();
         st.tensions = (0..r.elements()).map(|i| r.element_forces(i).map_or(0.0, |f| f.tension as f32)).collect();
         st.stretched_length = r.stretched_length() as f32;
+        st.contact_force = r.contact_force() as f32;
         st.energy = c.energy();
         st.time = c.time();
         st.newton_iterations = c.last_stats.newton_iterations;
