@@ -1,10 +1,12 @@
-//! Rope elements against rapier's colliders (issue 12, second part): at the
-//! start of each step every element of a cable with contacts on is tested
-//! as a capsule of the rope's radius against the colliders near it; each
-//! collider within the speculative margin gets a [`SphereContact`] on the
-//! element at the closest point, frozen for the step (its tangent plane
-//! there), which pushes only once the rope reaches it. Fixed and
-//! kinematic colliders only, for now (see `add_contacts`).
+//! Ropes and carried bodies against rapier's colliders (issue 12): at the
+//! start of each step, each node of a cable with contacts on (and each
+//! element whose middle dips nearer to a collider than its nodes, a rope
+//! over an edge), and each touch point of the bodies the chain carries,
+//! is tested against the colliders near it; each collider within the
+//! speculative margin gets a [`SphereContact`] there, on the tangent plane
+//! at its nearest point, frozen for the step, which pushes only once the
+//! rope or the body reaches it. Fixed and kinematic colliders only, for
+//! now (see `add_contacts`).
 //!
 //! The nearest points come from parry's point projection (f32) in the
 //! collider's own frame, with the face's own normal where there is one:
