@@ -1,0 +1,72 @@
+//! Cost of contact (issue 12), thread CPU time: one 1/60 s step of a free
+//! steel rope (20 mm) of N = 100 and 1 000 elements lying on a fixed ground
+//! box (every node in contact), against the same rope with
+//! `contacts = false` and no gravity (at rest in the same place, no
+//! contact elements; with gravity it would fall for ever). Each is
+//! settled for 1 s before timing. `docs/performance.md` reports the ratio
+//! and the growth from N = 100 to 1 000.
+
+use bevy_rapier_cable::scenario;
+use bevy_rapier_cable::sim::World;
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+
+#[path = "common/cpu_time.rs"]
+mod cpu_time;
+
+/// A rope of `n` elements, 0.5 m each, laid 1 mm above a ground box.
+fn world(n: usize, contacts: bool) -> World {
+    let length = 0.5 * n as f64;
+    let src = format!(
+        r#"
+[simulation]
+duration = 1000.0
+dt = 0.016666666666666666
+gravity = [0.0, {g}, 0.0]
+
+[[body]]
+name = "ground"
+type = "fixed"
+shape = "cuboid"
+half_extents = [{half}, 0.5, 5.0]
+position = [0.0, -0.5, 0.0]
+
+[[cable]]
+name = "rope"
+length = {length}
+segments = {n}
+diameter = 0.020
+material = "steel_wire_rope_6x36_iwrc"
+contacts = {contacts}
+path = [[{x0}, 0.011, 0.0], [{x1}, 0.011, 0.0]]
+"#,
+        g = if contacts { -9.81 } else { 0.0 },
+        half = 0.5 * length + 5.0,
+        x0 = -0.5 * length,
+        x1 = 0.5 * length,
+    );
+    let sc = scenario::parse(&src, "contact_bench.toml").unwrap();
+    let mut w = World::new(sc).unwrap();
+    for _ in 0..60 {
+        w.step().unwrap();
+    }
+    w
+}
+
+fn contact(c: &mut Criterion<cpu_time::ThreadCpuTime>) {
+    let mut g = c.benchmark_group("contact/rope_on_ground_step");
+    for n in [100usize, 1000] {
+        for contacts in [true, false] {
+            let mut w = world(n, contacts);
+            let id = BenchmarkId::new(if contacts { "contacts" } else { "no_contacts" }, n);
+            g.bench_function(id, |b| b.iter(|| w.step().unwrap()));
+        }
+    }
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().with_measurement(cpu_time::ThreadCpuTime).sample_size(20);
+    targets = contact
+}
+criterion_main!(benches);
