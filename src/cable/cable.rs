@@ -739,9 +739,9 @@ impl RopeView<'_> {
         let (first, last) = (self.layout.dof(0, 0), self.layout.dof(self.layout.elements, 0));
         ch.forces()
             .iter()
-            .zip(ch.force_element_wrenches(self.cable.state.t))
+            .zip(ch.force_element_points())
             .filter(|(f, _)| (first..last).contains(&f.link))
-            .filter_map(|(f, (at, _))| f.element.contact_force(self.cable.state.t, &at))
+            .filter_map(|(f, at)| f.element.contact_force(self.cable.state.t, &at))
             .sum()
     }
 

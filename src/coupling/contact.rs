@@ -41,13 +41,19 @@ impl CableContact {
     /// `element_mass` (kg) on the contact's stiffness `k` at that depth.
     /// `diameter` m.
     pub fn steel(diameter: f64, element_mass: f64) -> Result<Self, ContactError> {
-        let e_star = 1.0 / (2.0 * (1.0 - 0.09) / 210e9);
-        let depth: f64 = 1e-5;
-        let r = 0.5 * diameter;
-        let k = 1.5 * (4.0 / 3.0) * e_star * r.sqrt() * depth.sqrt();
-        let c = 2.0 * (k * element_mass.max(0.0)).sqrt();
-        Ok(CableContact { law: ImpactLaw::hertz(e_star, r, c, depth)? })
+        Ok(CableContact { law: steel_law(0.5 * diameter, element_mass)? })
     }
+}
+
+/// Steel on steel (E = 210 GPa, ν = 0.3 on both sides: E* = 1.154e11 Pa),
+/// Hertz with R* = `r_star` (m), damping ramped in over 1e-5 m to the
+/// critical damping `2 √(k m)` of `damped_mass` (kg) on the contact's
+/// stiffness `k` at that depth.
+fn steel_law(r_star: f64, damped_mass: f64) -> Result<ImpactLaw, ContactError> {
+    let e_star = 1.0 / (2.0 * (1.0 - 0.09) / 210e9);
+    let depth: f64 = 1e-5;
+    let k = 1.5 * (4.0 / 3.0) * e_star * r_star.sqrt() * depth.sqrt();
+    ImpactLaw::hertz(e_star, r_star, 2.0 * (k * damped_mass.max(0.0)).sqrt(), depth)
 }
 
 /// What the rope elements may touch: rapier's colliders, and the exact
@@ -71,14 +77,17 @@ fn offset(collider: &rp::Collider) -> (DVec3, DMat3) {
 /// pose when the adapter knows its motion, with the collider's offset on
 /// it; else rapier's f32 pose) and how its surface moves.
 struct Obstacle<'a> {
+    collider: &'a rp::Collider,
     origin: DVec3,
     rotation: DMat3,
     exact: Option<BaseState>,
     body: Option<&'a rp::RigidBody>,
+    /// The step's start, s.
+    now: f64,
 }
 
 impl<'a> Obstacle<'a> {
-    fn new(collider: &rp::Collider, world: &Contacts<'_>, bodies: &'a rp::RigidBodySet, now: f64) -> Self {
+    fn new(collider: &'a rp::Collider, world: &Contacts<'_>, bodies: &'a rp::RigidBodySet, now: f64) -> Self {
         let body = collider.parent().and_then(|p| bodies.get(p));
         let exact = collider.parent().and_then(|p| (world.motions)(p)).map(|m| m(now));
         let (origin, rotation) = match &exact {
@@ -91,7 +100,60 @@ impl<'a> Obstacle<'a> {
                 (pose.translation.as_dvec3(), DMat3::from_quat(pose.rotation.as_dquat().normalize()))
             }
         };
-        Obstacle { origin, rotation, exact, body }
+        Obstacle { collider, origin, rotation, exact, body, now }
+    }
+
+    /// Every collider a rope or a carried body may touch this step, at
+    /// `now` (s): not a sensor, not on a dynamic body (see
+    /// [`add_contacts`]) and not on a body in `exclude`.
+    fn all(world: &Contacts<'a>, bodies: &'a rp::RigidBodySet, exclude: &[rp::RigidBodyHandle], now: f64) -> Vec<Obstacle<'a>> {
+        world
+            .colliders
+            .iter()
+            .map(|(_, c)| c)
+            .filter(|c| {
+                // Dynamic bodies are left out for now: their motion is
+                // frozen over the step here, so a falling ball would
+                // squeeze the rope into the ground and fail the solve
+                // (measured: a 50 kg ball at 4.4 m/s onto a rope lying on
+                // the ground). They need their inertia in the rope's solve,
+                // as the carried bodies have.
+                let dynamic = c.parent().and_then(|p| bodies.get(p)).is_some_and(|rb| rb.is_dynamic());
+                !c.is_sensor() && !dynamic && !c.parent().is_some_and(|p| exclude.contains(&p))
+            })
+            .map(|c| Obstacle::new(c, world, bodies, now))
+            .collect()
+    }
+
+    /// The collider's bounding box, world, m.
+    fn aabb(&self) -> (DVec3, DVec3) {
+        let aabb = self.collider.compute_aabb();
+        (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3())
+    }
+
+    /// The nearest surface point to the world point `p` (m), its outward
+    /// normal and the signed distance of `p` (see [`nearest`]), in the
+    /// obstacle's frame.
+    fn nearest(&self, p: DVec3) -> Option<(DVec3, DVec3, f64)> {
+        self.nearest_local(self.local(p))
+    }
+
+    /// [`Obstacle::nearest`] to a point given in the obstacle's frame.
+    fn nearest_local(&self, q: DVec3) -> Option<(DVec3, DVec3, f64)> {
+        nearest(self.collider.shape(), q)
+    }
+
+    /// The world point `p` (m) in the obstacle's frame.
+    fn local(&self, p: DVec3) -> DVec3 {
+        self.rotation.transpose() * (p - self.origin)
+    }
+
+    /// The contact of a sphere of `radius` (m) with the obstacle's tangent
+    /// plane at the surface point `q` with normal `normal` (its frame), for
+    /// the step.
+    fn contact(&self, (q, normal, _): (DVec3, DVec3, f64), radius: f64, law: ImpactLaw) -> SphereContact {
+        let point = self.origin + self.rotation * q;
+        SphereContact { point, normal: self.rotation * normal, velocity: self.surface_velocity(point), time: self.now, radius, law }
     }
 
     /// Velocity of the obstacle's surface at world point `q`, m/s.
@@ -144,6 +206,7 @@ pub(crate) fn add_contacts(
 ) {
     let radius = 0.5 * cable.model.diameter;
     let gravity = cable.model.chain.gravity.length();
+    let obstacles = Obstacle::all(world, bodies, exclude, cable.time());
     for rope in 0..cable.ropes() {
         let Some(view) = cable.rope(rope) else {
             continue;
@@ -168,27 +231,9 @@ pub(crate) fn add_contacts(
         // fall from rest), plus one radius.
         let reach: Vec<f64> = (0..n).map(|i| radius + 2.0 * h * velocities[i].length().max(velocities[i + 1].length()) + h * h * gravity).collect();
         let mut hits: Vec<(f64, SphereContact)> = Vec::new();
-        for (_, collider) in world.colliders.iter() {
-            // Dynamic bodies are left out for now: their motion is frozen
-            // over the step here, so a falling ball would squeeze the rope
-            // into the ground and fail the solve (measured: a 50 kg ball at
-            // 4.4 m/s onto a rope lying on the ground). They need their
-            // inertia in the rope's solve, as the carried bodies have.
-            let dynamic = collider.parent().and_then(|p| bodies.get(p)).is_some_and(|rb| rb.is_dynamic());
-            if collider.is_sensor() || dynamic || collider.parent().is_some_and(|p| exclude.contains(&p)) {
-                continue;
-            }
-            let aabb = collider.compute_aabb();
-            let (cmin, cmax) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
-            let now = cable.time();
-            let obstacle = Obstacle::new(collider, world, bodies, now);
-            let (t, r) = (obstacle.origin, obstacle.rotation);
-            let shape = collider.shape();
-            let local = |p: DVec3| r.transpose() * (p - t);
-            let mut add = |s: f64, (q, normal, _): (DVec3, DVec3, f64)| {
-                let point = t + r * q;
-                hits.push((s, SphereContact { point, normal: r * normal, velocity: obstacle.surface_velocity(point), time: now, radius, law: contact.law }));
-            };
+        for obstacle in &obstacles {
+            let (cmin, cmax) = obstacle.aabb();
+            let mut add = |s: f64, hit| hits.push((s, obstacle.contact(hit, radius, contact.law)));
             let near = |i: usize| {
                 let (a, b) = (nodes[i], nodes[i + 1]);
                 let pad = DVec3::splat(radius + reach[i]);
@@ -201,14 +246,14 @@ pub(crate) fn add_contacts(
                 if !touches {
                     continue;
                 }
-                if let Some(hit) = nearest(shape, local(nodes[k])).filter(|hit| hit.2 - radius <= reach_k) {
+                if let Some(hit) = obstacle.nearest(nodes[k]).filter(|hit| hit.2 - radius <= reach_k) {
                     add(k as f64 * element_length, hit);
                 }
             }
             // Element interiors nearer than both their nodes.
             for i in (0..n).filter(|&i| near(i)) {
-                let (a, b) = (local(nodes[i]), local(nodes[i + 1]));
-                let dist = |f: f64| nearest(shape, a.lerp(b, f)).map_or(f64::INFINITY, |hit| hit.2);
+                let (a, b) = (obstacle.local(nodes[i]), obstacle.local(nodes[i + 1]));
+                let dist = |f: f64| obstacle.nearest_local(a.lerp(b, f)).map_or(f64::INFINITY, |hit| hit.2);
                 // A quarter-point below both ends starts a search around it
                 // (the distance to a convex shape is convex along the
                 // element); a straight run along a face has none.
@@ -230,7 +275,7 @@ pub(crate) fn add_contacts(
                 let f = 0.5 * (lo + hi);
                 let d = dist(f);
                 if f > 0.02 && f < 0.98 && d < ends - 1e-3 * radius && d - radius <= reach[i] {
-                    if let Some(hit) = nearest(shape, a.lerp(b, f)) {
+                    if let Some(hit) = obstacle.nearest_local(a.lerp(b, f)) {
                         add((i as f64 + f) * element_length, hit);
                     }
                 }
@@ -249,10 +294,7 @@ pub(crate) fn add_contacts(
 /// body's mass `mass` (kg) on the contact's stiffness there (four corners
 /// share a resting box).
 fn body_law(mass: f64) -> Result<ImpactLaw, ContactError> {
-    let e_star = 1.0 / (2.0 * (1.0 - 0.09) / 210e9);
-    let (r, depth): (f64, f64) = (0.01, 1e-5);
-    let k = 1.5 * (4.0 / 3.0) * e_star * r.sqrt() * depth.sqrt();
-    ImpactLaw::hertz(e_star, r, 2.0 * (k * 0.25 * mass.max(0.0)).sqrt(), depth)
+    steel_law(0.01, 0.25 * mass)
 }
 
 /// Points of a collider shape that can touch an obstacle, in the shape's
@@ -305,7 +347,7 @@ pub(crate) fn add_body_contacts(
     h: f64,
 ) -> bool {
     let gravity = cable.model.chain.gravity.length();
-    let now = cable.time();
+    let obstacles = Obstacle::all(world, bodies, exclude, cable.time());
     let mut hits: Vec<AttachedForce> = Vec::new();
     for c in carried {
         let Some(rb) = bodies.get(c.body) else {
@@ -324,21 +366,10 @@ pub(crate) fn add_body_contacts(
             if collider.is_sensor() {
                 continue;
             }
-            let (lt, lr) = collider
-                .position_wrt_parent()
-                .map_or((DVec3::ZERO, DMat3::IDENTITY), |l| (l.translation.as_dvec3(), DMat3::from_quat(l.rotation.as_dquat().normalize())));
+            let (lt, lr) = offset(collider);
             let points: Vec<(DVec3, f64)> = touch_points(collider.shape()).into_iter().map(|(q, radius)| (lt + lr * q, radius)).collect();
-            for (_, other) in world.colliders.iter() {
-                let Some(parent) = other.parent() else {
-                    continue;
-                };
-                if other.is_sensor() || exclude.contains(&parent) || bodies.get(parent).is_none_or(|b| b.is_dynamic()) {
-                    continue;
-                }
-                let obstacle = Obstacle::new(other, world, bodies, now);
-                let (t, rot) = (obstacle.origin, obstacle.rotation);
-                let aabb = other.compute_aabb();
-                let (cmin, cmax) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
+            for obstacle in &obstacles {
+                let (cmin, cmax) = obstacle.aabb();
                 for (q, radius) in &points {
                     let world_point = p + r * *q;
                     let speed = (v + w.cross(r * *q)).length();
@@ -347,14 +378,10 @@ pub(crate) fn add_body_contacts(
                     if (world_point - pad).cmpgt(cmax).any() || (world_point + pad).cmplt(cmin).any() {
                         continue;
                     }
-                    let Some((sq, normal, d)) = nearest(other.shape(), rot.transpose() * (world_point - t)) else {
+                    let Some(hit) = obstacle.nearest(world_point).filter(|hit| hit.2 - radius <= reach) else {
                         continue;
                     };
-                    if d - radius > reach {
-                        continue;
-                    }
-                    let point = t + rot * sq;
-                    let element = SphereContact { point, normal: rot * normal, velocity: obstacle.surface_velocity(point), time: now, radius: *radius, law };
+                    let element = obstacle.contact(hit, *radius, law);
                     hits.push(AttachedForce { link: c.place.link, local_point: c.place.origin + c.place.rotation * *q, element: Arc::new(element) });
                 }
             }

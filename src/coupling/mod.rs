@@ -1100,9 +1100,7 @@ pub fn step_cables(
             });
             let own: Vec<rp::RigidBodyHandle> = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).chain(rails.flatten()).collect();
             contact::add_contacts(&mut cc.cable, &settings, &contacts, bodies, &own, h);
-            let carried = std::mem::take(&mut cc.carried);
-            cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &carried, &contacts, bodies, &own, h);
-            cc.carried = carried;
+            cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &contacts, bodies, &own, h);
         }
     }
     // The cables' own solves: independent of each other and of rapier (every

@@ -151,9 +151,9 @@ pub const KINK_BAND: f64 = 1e-6;
 
 /// A Newton solve in a system that asks for it
 /// ([`SecondOrderSystem::patient_newton`]) may take up to this many times
-/// [`NewtonSettings::max_iterations`], while each correction is smaller than
-/// the one before; the first one that is not ends it (the step is then
-/// split). Measured on a light line whose end a stiff spring pulls with 100
+/// [`NewtonSettings::max_iterations`], while each correction stays within
+/// twice the smallest one so far (in norm); the first one past that ends it
+/// (the step is then split). Measured on a light line whose end a stiff spring pulls with 100
 /// times the payload's weight (docs/architecture.md, "Force elements"): the
 /// frame step then converges in 4.1 iterations per step on average, with a
 /// few steps needing 10 to 20, where splitting them failed down to 256

@@ -140,7 +140,8 @@ pub trait SecondOrderSystem {
     /// Whether a Newton solve may continue past
     /// [`NewtonSettings::max_iterations`](crate::integrate::NewtonSettings::max_iterations),
     /// up to [`PATIENT_BUDGET`](crate::integrate::PATIENT_BUDGET) times it,
-    /// as long as each correction is smaller than the one before. A system
+    /// as long as each correction stays within twice the smallest one so
+    /// far. A system
     /// whose tangent leaves out terms that can be large opts in: Newton on
     /// it then converges linearly, not quadratically, and a few more
     /// iterations solve the same equations where splitting the step would

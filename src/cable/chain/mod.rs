@@ -684,13 +684,13 @@ impl Chain {
     /// in order) and the wrench the element applies there at time `t` (s),
     /// at the last kinematics pass's poses.
     pub fn force_element_wrenches(&self, t: f64) -> Vec<(PointState, PointWrench)> {
-        self.forces
-            .iter()
-            .map(|f| {
-                let at = point_state(&self.poses[f.link], self.origin, f.local_point).0;
-                (at, f.element.wrench(t, &at))
-            })
-            .collect()
+        self.forces.iter().zip(self.force_element_points()).map(|(f, at)| (at, f.element.wrench(t, &at))).collect()
+    }
+
+    /// The world state of each force element's point ([`Chain::forces`],
+    /// in order) at the last kinematics pass's poses.
+    pub fn force_element_points(&self) -> impl Iterator<Item = PointState> + '_ {
+        self.forces.iter().map(|f| point_state(&self.poses[f.link], self.origin, f.local_point).0)
     }
 
     /// Potential energy of the anchor springs and force elements
