@@ -29,7 +29,7 @@
 //! * R: reset (both vehicles and the rope respawned at rest).
 //!
 //! **Limitation**: the rope now rests on the ground where it reaches it
-//! (frictionless rope–ground contact, issue 12), but it was designed
+//! (rope–ground contact with friction, issue 12), but it was designed
 //! before that: the hitches are high (1.6 m, a tow bar on a raised hitch),
 //! the rope short, the truck cannot reverse, and the trailer brakes hard
 //! (friction 0.35 when the rope is slack, like a driver on the brake) so

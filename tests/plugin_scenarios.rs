@@ -111,12 +111,13 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 19] = [
+const COMPARED: [&str; 21] = [
     "axial_bounce",
     "bend_45",
     "boom_hoist",
     "cantilever_end_moment",
     "cantilever_tip_load",
+    "capstan_friction",
     "catenary",
     "damped_drop",
     "hanging_chain",
@@ -125,6 +126,7 @@ const COMPARED: [&str; 19] = [
     "pendulum_60deg",
     "perf_swing_1000",
     "rope_on_ground",
+    "rope_on_slope",
     "rope_over_cylinder",
     "spin_up",
     "taut_string",
@@ -154,6 +156,7 @@ same_rows!(
     axial_bounce,
     bend_45,
     boom_hoist,
+    capstan_friction,
     cantilever_end_moment,
     cantilever_tip_load,
     catenary,
@@ -164,6 +167,7 @@ same_rows!(
     pendulum_60deg,
     perf_swing_1000,
     rope_on_ground,
+    rope_on_slope,
     rope_over_cylinder,
     spin_up,
     taut_string,

@@ -8,21 +8,12 @@ use std::path::Path;
 #[path = "common/irvine.rs"]
 mod irvine;
 use irvine::irvine_leg;
+#[path = "common/scenario_run.rs"]
+mod scenario_run;
+use scenario_run::run_scenario;
 
 fn run(file: &str) -> (World, Vec<Vec<f64>>) {
-    let sc = scenario::load(Path::new(file)).unwrap_or_else(|e| panic!("{e}"));
-    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
-    let frames = (world.scenario.simulation.duration / world.scenario.simulation.dt).round() as u64;
-    let mut rows = Vec::new();
-    let mut row = Vec::new();
-    for _ in 0..frames {
-        world.step().unwrap_or_else(|e| panic!("{e}"));
-        world.sample(&mut row);
-        let mut r = vec![world.time];
-        r.extend(&row);
-        rows.push(r);
-    }
-    (world, rows)
+    run_scenario(scenario::load(Path::new(file)).unwrap_or_else(|e| panic!("{e}")))
 }
 
 #[test]
@@ -799,9 +790,10 @@ fn rope_on_ground_scenario_carries_its_weight() {
 ///   weight only, `T₂ − T₁ = ρ g (y₂ − y₁)` (−12.85 N), within 10 % of it
 ///   (measured 4.6 %: the bending moments of the stress-free arc where it
 ///   no longer matches the cylinder; with the preset's ten times stiffer
-///   rope they move it by 8.6 N, docs/architecture.md). A Coulomb friction
-///   of μ = 0.3 (the scenario default, not built yet) would change the
-///   tension by 60 % of T, 460 times the weight term.
+///   rope they move it by 8.6 N, docs/architecture.md). The scenario sets
+///   `friction = 0` on the rope and the drum: with μ = 0.3 the tension
+///   could differ by up to 60 % of T across the wrap, 460 times the weight
+///   term (`capstan_friction.toml` checks that).
 #[test]
 fn rope_over_cylinder_scenario_is_a_frictionless_capstan() {
     let (world, rows) = run("assets/scenarios/rope_over_cylinder.toml");

@@ -22,10 +22,27 @@
 //! `C = ∂F_n/∂δ̇ n nᵀ` enter the implicit solve like any force element, so
 //! a steel contact is as stable at the frame step as the rope's own
 //! springs.
+//!
+//! [`CoulombFriction`] adds Coulomb friction with a stick state at the sphere's
+//! contact point `c = p − r n`, as OrcaFlex's seabed friction does: a
+//! tangential spring–damper `F_t = −k_t P (c − a) − c_t P ċ` (`P = I − n nᵀ`)
+//! toward an anchor `a` on the obstacle's surface (the "friction target"),
+//! capped at `μ F_n`. While `|F_t| ≤ μ F_n` the contact sticks: the anchor
+//! stays where it is, and a rope on a slope below `atan μ` holds on the
+//! spring's static deflection `μ F_n / k_t` at most (micrometres for steel)
+//! and does not creep. Past it the contact slips with `|F_t| = μ F_n`
+//! against the trial force's direction, and after the step the anchor is
+//! moved to where the spring alone gives that force
+//! ([`SphereContact::next_anchor`]), which the caller keeps for the next
+//! step. The contact point is a material point of the sphere, turning
+//! with its link, and the friction force acts there, so it also puts the
+//! moment `(−r n) × F_t` on the link: a ball rolls without stretching the
+//! spring, a rope turns.
 
 use glam::{DMat3, DVec3};
 
 use super::force::{ForceElement, PointState, PointWrench};
+use super::spatial::{skew, M6};
 
 /// Why a contact law cannot be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -136,13 +153,123 @@ pub struct SphereContact {
     pub radius: f64,
     /// The normal law.
     pub law: ImpactLaw,
+    /// Coulomb friction with a stick state (`None`: frictionless).
+    pub friction: Option<CoulombFriction>,
+}
+
+/// Coulomb friction of a [`SphereContact`] with a stick state (see the
+/// module docs): a tangential spring `stiffness` and damper `damping`
+/// from the sphere's contact point to `anchor`, capped at `coefficient`
+/// times the normal force.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoulombFriction {
+    /// Coulomb coefficient `μ` (≥ 0).
+    pub coefficient: f64,
+    /// Stick stiffness `k_t`, N/m (> 0).
+    pub stiffness: f64,
+    /// Stick damping `c_t` on the slip rate, N·s/m (≥ 0).
+    pub damping: f64,
+    /// The friction target: a point of the obstacle's surface at the
+    /// contact's `time`, moving with it, world, m.
+    pub anchor: DVec3,
+    /// The link's orientation (link frame to world) at the contact's
+    /// `time`: the sphere's contact point `c = p + R Rₜᵀ (−r n)` is a
+    /// material point of the sphere that turns with the link (`R` its
+    /// orientation now, `Rₜ` this one), so a ball that rolls does not
+    /// stretch the stick spring and one that spins in place does.
+    pub frame: DMat3,
+}
+
+impl CoulombFriction {
+    /// Friction `coefficient` (≥ 0) on a contact with normal law `law`:
+    /// the stick spring is the law's own stiffness at its damping depth,
+    /// `e K d_max^(e−1)`, damped by its `C_max`, so the stick state is as
+    /// stiff and as damped as the contact's resting normal direction.
+    /// `anchor` (m, world) and `frame`: see [`CoulombFriction::anchor`]
+    /// and [`CoulombFriction::frame`].
+    pub fn from_law(coefficient: f64, law: &ImpactLaw, anchor: DVec3, frame: DMat3) -> Result<Self, ContactError> {
+        if !(coefficient >= 0.0 && coefficient.is_finite()) {
+            return Err(ContactError::OutOfRange { name: "friction coefficient", value: coefficient, range: ">= 0" });
+        }
+        let stiffness = law.exponent * law.stiffness * law.damping_depth.powf(law.exponent - 1.0);
+        Ok(CoulombFriction { coefficient, stiffness, damping: law.max_damping, anchor, frame })
+    }
+}
+
+/// The tangential part of a contact at one state: the force, the
+/// factor on the stick tangents (1 sticking, `μ F_n/|F_trial|` slipping),
+/// the slip direction (zero sticking), the contact point's arm from the
+/// link point, and the stick spring's stretch `P (c − a)`.
+struct Tangential {
+    force: DVec3,
+    scale: f64,
+    direction: DVec3,
+    arm: DVec3,
+    stretch: DVec3,
 }
 
 impl SphereContact {
     /// A contact with a fixed plane through `point` (m) with unit outward
-    /// `normal`, for a sphere of `radius` m.
+    /// `normal`, for a sphere of `radius` m, frictionless.
     pub fn fixed(point: DVec3, normal: DVec3, radius: f64, law: ImpactLaw) -> Self {
-        SphereContact { point, normal, velocity: DVec3::ZERO, time: 0.0, radius, law }
+        SphereContact { point, normal, velocity: DVec3::ZERO, time: 0.0, radius, law, friction: None }
+    }
+
+    /// The same contact with Coulomb friction.
+    pub fn with_friction(mut self, friction: CoulombFriction) -> Self {
+        self.friction = Some(friction);
+        self
+    }
+
+    /// The friction force at time `t` (s) and the point's state (N, in
+    /// the plane, zero without friction or contact), and whether the
+    /// contact sticks.
+    pub fn friction_force(&self, t: f64, at: &PointState) -> (DVec3, bool) {
+        let normal = self.normal_force(t, at);
+        self.tangential(t, at, normal).map_or((DVec3::ZERO, false), |x| (x.force, x.direction == DVec3::ZERO))
+    }
+
+    /// Where the friction anchor goes for the next step, at time `t` (s),
+    /// the end of this one, and the point's state then (world, m), for a
+    /// contact made then at the sphere's lowest point `p − r n` (with the
+    /// link's orientation then as its [`CoulombFriction::frame`]): the
+    /// stick spring keeps its stretch while the contact sticks; once it
+    /// slips, the spring is left at the stretch that alone gives the
+    /// slipping force; without contact it is relaxed. `None` without
+    /// friction.
+    pub fn next_anchor(&self, t: f64, at: &PointState) -> Option<DVec3> {
+        let friction = self.friction?;
+        let normal = self.normal_force(t, at);
+        let stretch = match self.tangential(t, at, normal) {
+            None => DVec3::ZERO,
+            Some(x) if x.direction == DVec3::ZERO => x.stretch,
+            Some(x) => -x.force / friction.stiffness,
+        };
+        Some(at.point - self.normal * self.radius - stretch)
+    }
+
+    /// The tangential part at normal force `normal` (N); `None` without
+    /// friction or without contact.
+    fn tangential(&self, t: f64, at: &PointState, normal: f64) -> Option<Tangential> {
+        let friction = self.friction?;
+        let limit = friction.coefficient * normal;
+        if limit <= 0.0 {
+            return None;
+        }
+        let n = self.normal;
+        let arm = at.rotation * (friction.frame.transpose() * (-n * self.radius));
+        let anchor = friction.anchor + self.velocity * (t - self.time);
+        let slip = at.velocity + at.angular_velocity.cross(arm) - self.velocity;
+        let project = |x: DVec3| x - n * x.dot(n);
+        let stretch = project(at.point + arm - anchor);
+        let trial = -(stretch * friction.stiffness + project(slip) * friction.damping);
+        let size = trial.length();
+        Some(if size <= limit {
+            Tangential { force: trial, scale: 1.0, direction: DVec3::ZERO, arm, stretch }
+        } else {
+            let direction = trial / size;
+            Tangential { force: direction * limit, scale: limit / size, direction, arm, stretch }
+        })
     }
 
     /// Penetration (m, > 0 inside) and its rate (m/s, > 0 approaching) at
@@ -160,6 +287,15 @@ impl SphereContact {
     }
 }
 
+/// The tangents of a force `F(c, ċ)` at `c = p + δθ × a` (the arm `a`
+/// fixed in the world for the step) with `−∂F/∂c = m`, and its moment
+/// `a × F` about the link point: blocks over (rotation, point) of
+/// `−∂(a × F, F)/∂(δθ, δp)` (symmetric when `m` is).
+fn at_arm(arm: DVec3, m: DMat3) -> M6 {
+    let s = skew(arm);
+    M6 { a: -(s * m * s), b: s * m, c: -(m * s), d: m }
+}
+
 impl ForceElement for SphereContact {
     fn wrench(&self, t: f64, at: &PointState) -> PointWrench {
         let (depth, rate) = self.depth(t, at);
@@ -174,11 +310,35 @@ impl ForceElement for SphereContact {
         // −∂f/∂p = ∂F_n/∂δ n nᵀ, −∂f/∂v = ∂F_n/∂δ̇ n nᵀ.
         w.stiffness.d = nn * k;
         w.damping.d = nn * c;
+        if let (Some(friction), Some(x)) = (self.friction, self.tangential(t, at, f)) {
+            // Sticking: −∂F_t/∂c = k_t P. Slipping, F_t = μ F_n d̂ with
+            // d̂ the trial force's direction: k_t (μ F_n/|F_trial|)(P − d̂ d̂ᵀ),
+            // symmetric; the term μ d̂ ∂F_n/∂c that couples the slip
+            // force to the normal one is left out of the tangent (the
+            // solve would only take its symmetric part, which is
+            // indefinite), so Newton converges linearly while slipping.
+            // The moment arm's own turn (a term `[F]×[a]×`, not
+            // symmetric, of the size of the friction force times the
+            // radius) is left out as well.
+            let d = x.direction;
+            let tangent = DMat3::IDENTITY - nn - DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+            w.force += x.force;
+            w.moment = x.arm.cross(x.force);
+            w.stiffness += at_arm(x.arm, tangent * (friction.stiffness * x.scale));
+            w.damping += at_arm(x.arm, tangent * (friction.damping * x.scale));
+        }
         w
     }
 
     fn energy(&self, t: f64, at: &PointState) -> f64 {
-        self.law.potential(self.depth(t, at).0)
+        let normal = self.law.potential(self.depth(t, at).0);
+        // The stick spring's energy while it sticks (a slipping contact
+        // dissipates).
+        let stick = match (self.friction, self.tangential(t, at, self.normal_force(t, at))) {
+            (Some(friction), Some(x)) if x.direction == DVec3::ZERO => 0.5 * friction.stiffness * x.stretch.length_squared(),
+            _ => 0.0,
+        };
+        normal + stick
     }
 
     fn contact_force(&self, t: f64, at: &PointState) -> Option<f64> {

@@ -21,9 +21,10 @@
 //! first contact step.
 
 use super::{BodyMotion, CarriedLink};
-use crate::cable::{AttachedForce, BaseState, Cable, ContactError, ImpactLaw, SphereContact};
+use crate::cable::{AttachedForce, BaseState, Cable, ContactError, CoulombFriction, ImpactLaw, PointState, SphereContact};
 use glam::{DMat3, DVec3};
 use rapier3d::prelude as rp;
+use std::collections::HashMap;
 use std::sync::Arc;
 
 /// Contact settings of one cable: its elements against rapier's colliders.
@@ -31,6 +32,12 @@ use std::sync::Arc;
 pub struct CableContact {
     /// The normal law.
     pub law: ImpactLaw,
+    /// The rope's Coulomb friction coefficient (≥ 0), combined with each
+    /// collider's own as rapier combines two colliders' (the collider's
+    /// `friction_combine_rule`, against the rope's `Average`): with
+    /// rapier's defaults, the mean of the two. 0 on both sides:
+    /// frictionless.
+    pub friction: f64,
 }
 
 impl CableContact {
@@ -38,10 +45,114 @@ impl CableContact {
     /// E* = 1.154e11 Pa (E = 210 GPa, ν = 0.3 on both sides) and R* the
     /// rope's radius (a flat or larger obstacle), damping ramped in over
     /// 1e-5 m to `C_max = 2 √(k m_e)`, critical for an element of mass
-    /// `element_mass` (kg) on the contact's stiffness `k` at that depth.
-    /// `diameter` m.
+    /// `element_mass` (kg) on the contact's stiffness `k` at that depth;
+    /// Coulomb friction 0.3 (SCENARIO.md's default; see
+    /// [`CableContact::with_friction`]). `diameter` m.
     pub fn steel(diameter: f64, element_mass: f64) -> Result<Self, ContactError> {
-        Ok(CableContact { law: steel_law(0.5 * diameter, element_mass)? })
+        Ok(CableContact { law: steel_law(0.5 * diameter, element_mass)?, friction: 0.3 })
+    }
+
+    /// The same with the rope's friction coefficient `mu` (≥ 0, finite).
+    pub fn with_friction(self, mu: f64) -> Result<Self, ContactError> {
+        if !(mu >= 0.0 && mu.is_finite()) {
+            return Err(ContactError::OutOfRange { name: "friction", value: mu, range: ">= 0" });
+        }
+        Ok(CableContact { friction: mu, ..self })
+    }
+}
+
+/// Two friction coefficients combined as rapier combines two colliders'
+/// (`CoefficientCombineRule::combine`, the higher rule of the two wins).
+fn combine(a: f64, b: f64, rule_a: rp::CoefficientCombineRule, rule_b: rp::CoefficientCombineRule) -> f64 {
+    use rp::CoefficientCombineRule as Rule;
+    match rule_a.max(rule_b) {
+        Rule::Average => 0.5 * (a + b),
+        Rule::Min => a.min(b).abs(),
+        Rule::Multiply => a * b,
+        Rule::Max => a.max(b),
+        Rule::ClampedSum => (a + b).clamp(0.0, 1.0),
+        Rule::GeometricMean => (a.max(0.0) * b.max(0.0)).sqrt(),
+    }
+}
+
+/// Which contact a friction anchor belongs to, from one step to the next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Site {
+    /// Rope `rope`'s node `k` (`2k`) or element `i`'s interior
+    /// (`2i + 1`), against `obstacle`.
+    Rope { rope: usize, site: usize, obstacle: rp::ColliderHandle },
+    /// Touch point `point` of a carried body's collider `collider`,
+    /// against `obstacle`.
+    Body { collider: rp::ColliderHandle, point: usize, obstacle: rp::ColliderHandle },
+}
+
+/// The friction anchors ("friction targets") of a cable's contacts, kept
+/// from one step to the next: a contact that sticks keeps its anchor, one
+/// that is not found again forgets it. An element interior's contact also
+/// keeps its material point (the fraction along the element): the search
+/// for the element's nearest point moves it by rounding from step to step
+/// (1e-6 m, as much as a steel contact's whole stick deflection), which
+/// would read as slip and make a resting wrap chatter (measured: tensions
+/// across a still capstan wrap swinging ±5 %).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct FrictionMemory {
+    /// Each site's anchor at the cable's time (world, m) and its
+    /// fraction along the element (0 at a node or a body).
+    anchors: HashMap<Site, (DVec3, f64)>,
+    /// This step's contacts, in the order of their force elements: the
+    /// site, the contact, its fraction along its element and its friction
+    /// coefficient.
+    step: Vec<(Site, SphereContact, f64, f64)>,
+}
+
+impl FrictionMemory {
+    /// Where along element interior `site` the contact goes this step: at
+    /// the material point of the last step while the nearest point `f`
+    /// (a fraction of the element) found now is within 0.1 of it, else at
+    /// `f`.
+    fn fraction(&self, site: Site, f: f64) -> f64 {
+        self.anchors.get(&site).map(|x| x.1).filter(|old| (old - f).abs() < 0.1).unwrap_or(f)
+    }
+
+    /// Notes this step's next contact (its force element the next one
+    /// added): at `site`, `fraction` along its element, with the friction
+    /// coefficient `mu` (none if 0). [`FrictionMemory::attach`] gives it
+    /// its friction.
+    fn note(&mut self, site: Site, contact: SphereContact, mu: f64, fraction: f64) -> SphereContact {
+        self.step.push((site, contact, fraction, mu));
+        contact
+    }
+
+    /// Gives each contact noted this step (force elements `fixed..` of
+    /// `cable`, at the step's start) its friction: the anchor its site had
+    /// at the end of the last step (if it was at the same fraction along
+    /// its element), else the contact point now, and the link's
+    /// orientation now as its frame.
+    pub(crate) fn attach(&mut self, cable: &mut Cable, fixed: usize) {
+        let points: Vec<PointState> = cable.model.chain.force_element_points().skip(fixed).collect();
+        let forces = cable.model.chain.forces_mut();
+        for (k, ((site, contact, fraction, mu), at)) in self.step.iter_mut().zip(points).enumerate() {
+            if *mu <= 0.0 {
+                continue;
+            }
+            let kept = self.anchors.get(site).filter(|x| x.1 == *fraction).map(|x| x.0);
+            let anchor = kept.unwrap_or(at.point - contact.normal * contact.radius);
+            if let Ok(friction) = CoulombFriction::from_law(*mu, &contact.law, anchor, at.rotation) {
+                *contact = contact.with_friction(friction);
+                forces[fixed + k].element = Arc::new(*contact);
+            }
+        }
+    }
+
+    /// After the step: each contact's anchor for the next one, from the
+    /// points of this step's contact force elements at time `t` (s).
+    pub(crate) fn remember(&mut self, t: f64, points: impl Iterator<Item = PointState>) {
+        self.anchors = self.step.drain(..).zip(points).filter_map(|((site, c, f, _), at)| c.next_anchor(t, &at).map(|a| (site, (a, f)))).collect();
+    }
+
+    /// Forgets this step's contacts (a step that was not taken).
+    pub(crate) fn discard_step(&mut self) {
+        self.step.clear();
     }
 }
 
@@ -77,6 +188,7 @@ fn offset(collider: &rp::Collider) -> (DVec3, DMat3) {
 /// pose when the adapter knows its motion, with the collider's offset on
 /// it; else rapier's f32 pose) and how its surface moves.
 struct Obstacle<'a> {
+    handle: rp::ColliderHandle,
     collider: &'a rp::Collider,
     origin: DVec3,
     rotation: DMat3,
@@ -87,7 +199,7 @@ struct Obstacle<'a> {
 }
 
 impl<'a> Obstacle<'a> {
-    fn new(collider: &'a rp::Collider, world: &Contacts<'_>, bodies: &'a rp::RigidBodySet, now: f64) -> Self {
+    fn new(handle: rp::ColliderHandle, collider: &'a rp::Collider, world: &Contacts<'_>, bodies: &'a rp::RigidBodySet, now: f64) -> Self {
         let body = collider.parent().and_then(|p| bodies.get(p));
         let exact = collider.parent().and_then(|p| (world.motions)(p)).map(|m| m(now));
         let (origin, rotation) = match &exact {
@@ -100,7 +212,7 @@ impl<'a> Obstacle<'a> {
                 (pose.translation.as_dvec3(), DMat3::from_quat(pose.rotation.as_dquat().normalize()))
             }
         };
-        Obstacle { collider, origin, rotation, exact, body, now }
+        Obstacle { handle, collider, origin, rotation, exact, body, now }
     }
 
     /// Every collider a rope or a carried body may touch this step, at
@@ -110,8 +222,7 @@ impl<'a> Obstacle<'a> {
         world
             .colliders
             .iter()
-            .map(|(_, c)| c)
-            .filter(|c| {
+            .filter(|(_, c)| {
                 // Dynamic bodies are left out for now: their motion is
                 // frozen over the step here, so a falling ball would
                 // squeeze the rope into the ground and fail the solve
@@ -121,7 +232,7 @@ impl<'a> Obstacle<'a> {
                 let dynamic = c.parent().and_then(|p| bodies.get(p)).is_some_and(|rb| rb.is_dynamic());
                 !c.is_sensor() && !dynamic && !c.parent().is_some_and(|p| exclude.contains(&p))
             })
-            .map(|c| Obstacle::new(c, world, bodies, now))
+            .map(|(h, c)| Obstacle::new(h, c, world, bodies, now))
             .collect()
     }
 
@@ -153,7 +264,7 @@ impl<'a> Obstacle<'a> {
     /// the step.
     fn contact(&self, (q, normal, _): (DVec3, DVec3, f64), radius: f64, law: ImpactLaw) -> SphereContact {
         let point = self.origin + self.rotation * q;
-        SphereContact { point, normal: self.rotation * normal, velocity: self.surface_velocity(point), time: self.now, radius, law }
+        SphereContact { point, normal: self.rotation * normal, velocity: self.surface_velocity(point), time: self.now, radius, law, friction: None }
     }
 
     /// Velocity of the obstacle's surface at world point `q`, m/s.
@@ -199,6 +310,7 @@ fn nearest(shape: &dyn rp::Shape, p: DVec3) -> Option<(DVec3, DVec3, f64)> {
 pub(crate) fn add_contacts(
     cable: &mut Cable,
     contact: &CableContact,
+    memory: &mut FrictionMemory,
     world: &Contacts<'_>,
     bodies: &rp::RigidBodySet,
     exclude: &[rp::RigidBodyHandle],
@@ -233,7 +345,13 @@ pub(crate) fn add_contacts(
         let mut hits: Vec<(f64, SphereContact)> = Vec::new();
         for obstacle in &obstacles {
             let (cmin, cmax) = obstacle.aabb();
-            let mut add = |s: f64, hit| hits.push((s, obstacle.contact(hit, radius, contact.law)));
+            let co = obstacle.collider;
+            let mu = combine(contact.friction, co.friction() as f64, rp::CoefficientCombineRule::Average, co.friction_combine_rule());
+            let site = |site: usize| Site::Rope { rope, site, obstacle: obstacle.handle };
+            let mut add = |memory: &mut FrictionMemory, at: usize, s: f64, hit, fraction| {
+                let c = memory.note(site(at), obstacle.contact(hit, radius, contact.law), mu, fraction);
+                hits.push((s, c));
+            };
             let near = |i: usize| {
                 let (a, b) = (nodes[i], nodes[i + 1]);
                 let pad = DVec3::splat(radius + reach[i]);
@@ -247,7 +365,7 @@ pub(crate) fn add_contacts(
                     continue;
                 }
                 if let Some(hit) = obstacle.nearest(nodes[k]).filter(|hit| hit.2 - radius <= reach_k) {
-                    add(k as f64 * element_length, hit);
+                    add(memory, 2 * k, k as f64 * element_length, hit, 0.0);
                 }
             }
             // Element interiors nearer than both their nodes.
@@ -275,8 +393,9 @@ pub(crate) fn add_contacts(
                 let f = 0.5 * (lo + hi);
                 let d = dist(f);
                 if f > 0.02 && f < 0.98 && d < ends - 1e-3 * radius && d - radius <= reach[i] {
+                    let f = memory.fraction(site(2 * i + 1), f);
                     if let Some(hit) = obstacle.nearest_local(a.lerp(b, f)) {
-                        add((i as f64 + f) * element_length, hit);
+                        add(memory, 2 * i + 1, (i as f64 + f) * element_length, hit, f);
                     }
                 }
             }
@@ -341,6 +460,7 @@ fn touch_points(shape: &dyn rp::Shape) -> Vec<(DVec3, f64)> {
 pub(crate) fn add_body_contacts(
     cable: &mut Cable,
     carried: &[CarriedLink],
+    memory: &mut FrictionMemory,
     world: &Contacts<'_>,
     bodies: &rp::RigidBodySet,
     exclude: &[rp::RigidBodyHandle],
@@ -370,7 +490,9 @@ pub(crate) fn add_body_contacts(
             let points: Vec<(DVec3, f64)> = touch_points(collider.shape()).into_iter().map(|(q, radius)| (lt + lr * q, radius)).collect();
             for obstacle in &obstacles {
                 let (cmin, cmax) = obstacle.aabb();
-                for (q, radius) in &points {
+                let co = obstacle.collider;
+                let mu = combine(collider.friction() as f64, co.friction() as f64, collider.friction_combine_rule(), co.friction_combine_rule());
+                for (point, (q, radius)) in points.iter().enumerate() {
                     let world_point = p + r * *q;
                     let speed = (v + w.cross(r * *q)).length();
                     let reach = 2.0 * h * speed + h * h * gravity + 0.01;
@@ -381,7 +503,8 @@ pub(crate) fn add_body_contacts(
                     let Some(hit) = obstacle.nearest(world_point).filter(|hit| hit.2 - radius <= reach) else {
                         continue;
                     };
-                    let element = obstacle.contact(hit, *radius, law);
+                    let site = Site::Body { collider: *own, point, obstacle: obstacle.handle };
+                    let element = memory.note(site, obstacle.contact(hit, *radius, law), mu, 0.0);
                     hits.push(AttachedForce { link: c.place.link, local_point: c.place.origin + c.place.rotation * *q, element: Arc::new(element) });
                 }
             }

@@ -354,6 +354,8 @@ pub struct CoupledCable {
     pub contact: Option<CableContact>,
     /// Number of force elements that are not this step's contacts.
     fixed_forces: usize,
+    /// The friction anchors of its contacts, from step to step.
+    friction: contact::FrictionMemory,
     /// Whether this step's contacts include the carried bodies' own with
     /// fixed or kinematic colliders (then rapier's impulse from those is
     /// not applied again, see [`after_rapier`]).
@@ -975,6 +977,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         fixed_loads,
         contact: spec.contact,
         fixed_forces,
+        friction: contact::FrictionMemory::default(),
         body_contacts: false,
         failed: false,
         advance_failure: None,
@@ -1090,6 +1093,7 @@ pub fn step_cables(
     // step (the cable's own bodies excluded).
     for cc in cables.iter_mut().filter(|c| !c.failed) {
         contact::clear(&mut cc.cable, cc.fixed_forces);
+        cc.friction.discard_step();
         cc.body_contacts = false;
         if let Some(settings) = cc.contact {
             // The cable's own bodies, and a trolley's rail (rapier does not
@@ -1099,8 +1103,9 @@ pub fn step_cables(
                 _ => None,
             });
             let own: Vec<rp::RigidBodyHandle> = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).chain(rails.flatten()).collect();
-            contact::add_contacts(&mut cc.cable, &settings, &contacts, bodies, &own, h);
-            cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &contacts, bodies, &own, h);
+            contact::add_contacts(&mut cc.cable, &settings, &mut cc.friction, &contacts, bodies, &own, h);
+            cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, &own, h);
+            cc.friction.attach(&mut cc.cable, cc.fixed_forces);
         }
     }
     // The cables' own solves: independent of each other and of rapier (every
@@ -1130,6 +1135,11 @@ pub fn step_cables(
         if let Some((time, e)) = cc.advance_failure.take() {
             cc.failed = true;
             failures.push((ci, time, e));
+        } else if !cc.failed {
+            // Where each contact's friction anchor goes for the next step.
+            let t = cc.cable.time();
+            let points = cc.cable.model.chain.force_element_points().skip(cc.fixed_forces);
+            cc.friction.remember(t, points);
         }
     }
     // 3. Hand the carried bodies to rapier; explicit reactions.

@@ -140,9 +140,16 @@ pub struct CableDescriptor {
     /// out of the colliders of fixed and kinematic bodies (not the cable's
     /// own) by steel-on-steel Hertz contact
     /// ([`CableContact::steel`](crate::coupling::CableContact::steel)),
-    /// inside the implicit solve. Frictionless for now; dynamic bodies
-    /// pass through the rope for now.
+    /// inside the implicit solve, with Coulomb friction
+    /// ([`CableDescriptor::friction`]). Dynamic bodies pass through the
+    /// rope for now.
     pub contacts: bool,
+    /// The rope's Coulomb friction coefficient (default 0.3), combined
+    /// with each collider's bevy_rapier `Friction` as rapier combines two
+    /// colliders' (with the defaults, the mean of the two). A contact
+    /// sticks while the friction force stays below the coefficient times
+    /// the normal force, and slips at that force beyond it.
+    pub friction: f64,
 }
 
 /// A constant point load on a cable (world frame).
@@ -244,6 +251,7 @@ impl CableDescriptor {
             stress_free: false,
             static_start: None,
             contacts: true,
+            friction: 0.3,
         }
     }
 
@@ -312,6 +320,14 @@ impl CableDescriptor {
     /// rope passes through them); see [`CableDescriptor::contacts`].
     pub fn contacts(mut self, yes: bool) -> Self {
         self.contacts = yes;
+        self
+    }
+
+    /// Sets the rope's Coulomb friction coefficient (≥ 0; default 0.3);
+    /// see [`CableDescriptor::friction`]. A negative or non-finite value
+    /// is refused when the cable is built, with its name.
+    pub fn friction(mut self, mu: f64) -> Self {
+        self.friction = mu;
         self
     }
 

@@ -357,6 +357,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
         d.damping = c.damping;
         d.tension_only = c.tension_only;
         d.contacts = c.contacts;
+        d.friction = c.friction;
         d.scheme = scheme.clone();
         d.stress_free = c.stress_free;
         d.static_start = sim.statics.then_some(sim.static_load_steps);

@@ -147,7 +147,15 @@ pub(crate) fn init_cables(
         }
         let exact_ends = [lumped(sb), lumped(eb)];
         let contact = if d.contacts {
-            CableContact::steel(d.material.diameter(), d.material.section().linear_density * d.length / d.segments.max(1) as f64).ok()
+            match CableContact::steel(d.material.diameter(), d.material.section().linear_density * d.length / d.segments.max(1) as f64)
+                .and_then(|k| k.with_friction(d.friction))
+            {
+                Ok(k) => Some(k),
+                Err(e) => {
+                    fail(&mut commands, &mut errors, entity, e.to_string());
+                    continue;
+                }
+            }
         } else {
             None
         };

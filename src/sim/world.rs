@@ -362,7 +362,11 @@ fn cable_spec(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, rapier: &Rapi
         end: attach(&c.end),
         scheme: scheme.clone(),
         exact: [exact(&c.start), exact(&c.end)],
-        contact: if c.contacts { CableContact::steel(c.diameter, c.linear_density * c.length / c.segments.max(1) as f64).ok() } else { None },
+        contact: if c.contacts {
+            CableContact::steel(c.diameter, c.linear_density * c.length / c.segments.max(1) as f64).and_then(|k| k.with_friction(c.friction)).ok()
+        } else {
+            None
+        },
     }
 }
 
