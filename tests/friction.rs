@@ -22,7 +22,7 @@ fn law() -> ImpactLaw {
 /// `anchor` and its link turned by `frame` when the contact was made.
 fn ball_contact(mu: f64, anchor: DVec3, frame: DMat3) -> SphereContact {
     let law = law();
-    SphereContact::fixed(DVec3::ZERO, DVec3::Y, 0.05, law).with_friction(CoulombFriction::from_law(mu, &law, anchor, frame).unwrap())
+    SphereContact::fixed(DVec3::ZERO, DVec3::Y, 0.05, law).with_friction(CoulombFriction::from_law(mu, &law, anchor, &at(DVec3::ZERO, frame), 1e9).unwrap())
 }
 
 fn at(point: DVec3, rotation: DMat3) -> PointState {
@@ -43,9 +43,7 @@ fn column(m: &bevy_rapier_cable::cable::spatial::M6, j: usize) -> [f64; 6] {
 /// While a contact sticks, its stiffness and damping tangents are the
 /// derivatives of its wrench (central differences over the link point's
 /// displacement and rotation, and over its velocity and angular
-/// velocity), within 1e-6 of each block's largest entry, but for the one term the
-/// law leaves out and says so: the turn of the moment arm, `[F]×[a]×`
-/// (friction force times the radius) in the moment–rotation block.
+/// velocity), within 1e-6 of each 3×3 block's largest entry.
 #[test]
 fn sticking_friction_tangents_are_the_derivatives_of_its_wrench() {
     let frame = DMat3::from_quat(DQuat::from_rotation_z(0.2));
@@ -79,15 +77,12 @@ fn sticking_friction_tangents_are_the_derivatives_of_its_wrench() {
             let m = [[tangent.a, tangent.b], [tangent.c, tangent.d]][i / 3][j / 3];
             m.to_cols_array().iter().fold(0.0f64, |a, x| a.max(x.abs()))
         };
-        let arm = DVec3::new(0.0, -0.05, 0.0);
-        let left_out =
-            -(bevy_rapier_cable::cable::spatial::skew(w0.force - DVec3::Y * c.normal_force(0.0, &base)) * bevy_rapier_cable::cable::spatial::skew(arm));
         for j in 0..6 {
             let (p, m) = (moved(j, eps, rate), moved(j, -eps, rate));
             let col = column(&tangent, j);
             for i in 0..6 {
                 let fd = -(p[i] - m[i]) / (2.0 * eps);
-                let expected = if !rate && i < 3 && j < 3 { col[i] + left_out.col(j)[i] } else { col[i] };
+                let expected = col[i];
                 let scale = block(i, j);
                 assert!(
                     (fd - expected).abs() < 1e-6 * scale,
@@ -99,30 +94,38 @@ fn sticking_friction_tangents_are_the_derivatives_of_its_wrench() {
     }
 }
 
-/// The stick spring follows the sphere's material contact point: a ball
-/// that rolls by 0.01 rad (its centre 0.5 mm on) sticks, its spring
-/// stretched only by the second-order `r (θ − sin θ)` (8.3e-9 m) by which
-/// its material point leaves the contact's start point; the same 0.5 mm
-/// slid without turning slips, at `μ F_n` exactly, against the motion.
+/// The stick spring stretches with the slip at the contact point: a ball
+/// that rolls by 0.5 rad in one step (its centre 25 mm on, 30 times the
+/// largest stick deflection) keeps it relaxed (below 1e-9 of the slipping
+/// force); the same 25 mm slid without turning slips, at `μ F_n` exactly,
+/// against the motion; spinning in place by 1e-4 rad about the vertical
+/// does not move the contact point, and about the rolling axis sticks with
+/// the spring stretched by `r θ`.
 #[test]
 fn a_rolling_ball_does_not_stretch_the_stick_spring_and_a_sliding_one_slips_at_mu_fn() {
-    let (r, depth, angle, mu) = (0.05, 2e-6, 0.01f64, 0.4);
+    let (r, depth, angle, mu) = (0.05, 2e-6, 0.5f64, 0.4);
     let c = ball_contact(mu, DVec3::ZERO, DMat3::IDENTITY);
     let centre = DVec3::new(r * angle, r - depth, 0.0);
+    let limit = mu * c.normal_force(0.0, &at(centre, DMat3::IDENTITY));
     // Rolling along +x turns the ball about −z.
     let (rolling, rolling_sticks) = c.friction_force(0.0, &at(centre, DMat3::from_rotation_z(-angle)));
     let (sliding, sliding_sticks) = c.friction_force(0.0, &at(centre, DMat3::IDENTITY));
-    let limit = mu * c.normal_force(0.0, &at(centre, DMat3::IDENTITY));
-    let k_t = CoulombFriction::from_law(mu, &law(), DVec3::ZERO, DMat3::IDENTITY).unwrap().stiffness;
-    let expected = -k_t * r * (angle - angle.sin());
-    println!("rolled: {rolling} N (expected {expected:e} N x), sticking {rolling_sticks}; slid: {sliding} N, sticking {sliding_sticks}, μ F_n = {limit:e} N");
-    assert!(rolling_sticks && (rolling.x / expected - 1.0).abs() < 1e-6 && rolling.y == 0.0 && rolling.z.abs() < 1e-12, "rolled: {rolling}");
+    let still = DVec3::new(0.0, r - depth, 0.0);
+    let (spun, _) = c.friction_force(0.0, &at(still, DMat3::from_rotation_y(1e-4)));
+    let (turned, turned_sticks) = c.friction_force(0.0, &at(still, DMat3::from_rotation_z(1e-6)));
+    let k_t = CoulombFriction::from_law(mu, &law(), DVec3::ZERO, &at(DVec3::ZERO, DMat3::IDENTITY), 1e9).unwrap().stiffness;
+    println!(
+        "rolled: {rolling} N, sticking {rolling_sticks}; slid: {sliding} N, sticking {sliding_sticks}, μ F_n = {limit:e} N; spun {spun} N; turned {turned} N"
+    );
+    assert!(rolling_sticks && rolling.length() < 1e-9 * limit, "rolled: {rolling}");
     assert!(!sliding_sticks && (sliding.length() / limit - 1.0).abs() < 1e-12 && sliding.x < 0.0, "slid: {sliding} vs μ F_n {limit}");
+    assert!(spun.length() < 1e-9 * limit, "spun: {spun}");
+    // Turning about +z by θ moves the bottom material point by θ ẑ × (−r ŷ) = +r θ x̂.
+    assert!(turned_sticks && (turned.x / (-k_t * r * 1e-6) - 1.0).abs() < 1e-6, "turned: {turned} vs {}", -k_t * r * 1e-6);
 }
 
 fn run_source(source: &str, name: &str) -> (World, Vec<Vec<f64>>) {
-    let sc = scenario::parse(source, name).unwrap_or_else(|e| panic!("{e}"));
-    run_scenario(sc)
+    run_scenario(scenario::parse(source, name).unwrap_or_else(|e| panic!("{e}")))
 }
 
 /// `rope_on_slope.toml` with the slope at `degrees` and friction `mu` on
@@ -176,22 +179,31 @@ fn rope_on_slope_scenario_sticks_and_does_not_creep() {
 }
 
 /// Either side of the friction angle atan 0.3 = 16.70°: at 16° the rope
-/// sticks (moves less than 1e-12 m after landing); at 18° and 25° it
+/// comes to rest (it slides 7 cm while it lands: a contact has no
+/// friction in its first step, see `CoulombFriction::normal_bound`, and
+/// kinetic friction then stops it within a second) and moves less than
+/// 1e-12 m after 1.5 s; at 18° and 25° it
 /// slides down at `g (sin θ − μ cos θ)` (0.2325 and 1.4787 m/s²), and
 /// frictionless at 25° at `g sin θ`, each within 5e-4 (the acceleration
-/// from the distance slid in 3 s, which includes the 1 mm landing).
+/// from the distances slid at 1, 2 and 3 s).
 #[test]
 fn a_rope_on_a_slope_sticks_below_the_friction_angle_and_slides_at_coulombs_rate_above() {
     let g = 9.81;
     let (_, rows) = run_source(&slope(16.0, 0.3), "slope16.toml");
-    let path = travel(&rows[30..]);
+    let landing = travel(&rows)[90].1;
+    let path = travel(&rows[90..]);
     let moved = path.iter().map(|p| p.1).fold(0.0f64, f64::max);
-    println!("16°: moved {moved:e} m after landing");
+    println!("16°: slid {landing:.4} m while landing, then moved {moved:e} m in 1.5 s");
+    assert!(landing < 0.1, "16°: slid {landing} m while landing");
     assert!(moved < 1e-12, "16°: moved {moved}");
     for (degrees, mu) in [(18.0, 0.3), (25.0, 0.3), (25.0, 0.0)] {
         let (_, rows) = run_source(&slope(degrees, mu), "slope.toml");
-        let (t, s) = *travel(&rows).last().unwrap();
-        let a = 2.0 * s / (t * t);
+        // From the distances at 1, 2 and 3 s (after the landing, whose
+        // first contact step has no friction): exact for a constant
+        // acceleration.
+        let path = travel(&rows);
+        let at = |k: usize| path[60 * k - 1].1;
+        let a = at(3) - 2.0 * at(2) + at(1);
         let th = f64::to_radians(degrees);
         let expected = g * (th.sin() - mu * th.cos());
         println!("{degrees}°, μ {mu}: a = {a:.6} m/s² vs {expected:.6} ({:+.1e})", a / expected - 1.0);
@@ -199,15 +211,49 @@ fn a_rope_on_a_slope_sticks_below_the_friction_angle_and_slides_at_coulombs_rate
     }
 }
 
+/// A rope lying across a slope, the newcomer's case that failed: 4 m of
+/// 16 mm steel rope in 40 elements dropped 1.5 mm onto a 20° slope across
+/// its fall line (μ = 0.3 on the rope, 0.5 on the slope: 0.4, above
+/// tan 20° = 0.364). It lands, stays (after 1 s it moves less than
+/// 1e-9 m), and the 3 s run through. (With the friction limit at the
+/// current normal force it failed at its first contact step; with the
+/// friction at the rope's surface it rolled and failed at 1.5 s.)
+#[test]
+fn a_rope_lying_across_a_slope_lands_and_stays() {
+    let (t, mu) = (20f64.to_radians(), 0.3);
+    let (n, d) = (DVec3::new(-t.sin(), t.cos(), 0.0), DVec3::new(t.cos(), t.sin(), 0.0));
+    let a = -2.0 * d + 0.0095 * n;
+    let source = format!(
+        "[simulation]\nduration = 3.0\ndt = 0.016666666666666666\n\n[[body]]\nname = \"ramp\"\ntype = \"fixed\"\nshape = \"cuboid\"\nhalf_extents = [20.0, 0.5, 20.0]\nposition = [{}, {}, 0.0]\nrotation = [0.0, 0.0, 20.0]\n\n[[cable]]\nname = \"rope\"\nlength = 4.0\nsegments = 40\ndiameter = 0.016\nmaterial = \"steel_wire_rope_6x36_iwrc\"\nfriction = {mu}\npath = [[{}, {}, -2.0], [{}, {}, 2.0]]\n\n[[probe]]\nname = \"middle\"\ncable = \"rope\"\nquantity = \"position\"\ns = 2.0\n",
+        -0.5 * n.x,
+        -0.5 * n.y,
+        a.x,
+        a.y,
+        a.x,
+        a.y
+    );
+    let (_, rows) = run_source(&source, "across.toml");
+    let landed = travel(&rows)[60].1;
+    let moved = travel(&rows[60..]).iter().map(|p| p.1).fold(0.0f64, f64::max);
+    println!("across a 20° slope: slid {landed:.4} m while landing, then moved {moved:e} m in 2 s");
+    assert!(rows.len() == 180, "ran {} frames", rows.len());
+    assert!(moved < 1e-9, "moved {moved} m after landing");
+}
+
 /// `capstan_friction.toml`: a 10 mm steel rope half a turn over a fixed
 /// drum, a 500 kg ball on one end, a kinematic hand on the other, μ = 0.3.
 /// * While the rope slides (the hand hauling, then lowering at 0.1 m/s),
 ///   the tension ratio across the wrap averages the Euler–Eytelwein
-///   `e^(±μπ)` (2.566 and 0.390) within 2e-3, and never leaves it by more
-///   than 1 %.
+///   `e^(±μπ)` (2.566 and 0.390) within 5e-3 (measured −8.3e-4 and
+///   +3.1e-3, the blips below included), and never leaves it by more
+///   than 5 % (measured 3.6 %: a node entering the wrap has no friction in
+///   its first contact step, and the ratio blips for a frame every time
+///   one does).
 /// * While the hand holds, the ratio stays inside `[e^(−μπ), e^(μπ)]`
 ///   (static friction is indeterminate inside it) and the ball moves less
-///   than 1e-6 m.
+///   than 1e-6 m; the drum's `contact_force` probe carries both tensions
+///   and the weight of the rope between the probes, within 1e-4 (measured
+///   3.3e-6).
 #[test]
 fn capstan_friction_scenario_follows_euler_eytelwein() {
     let sc = scenario::load(Path::new("assets/scenarios/capstan_friction.toml")).unwrap();
@@ -219,11 +265,19 @@ fn capstan_friction_scenario_follows_euler_eytelwein() {
         let mean = w.iter().sum::<f64>() / w.len() as f64;
         let worst = w.iter().map(|x| (x / expected - 1.0).abs()).fold(0.0f64, f64::max);
         println!("{name}: T_hand/T_load = {mean:.5} vs {expected:.5} ({:+.1e}), worst {worst:.1e}", mean / expected - 1.0);
-        assert!((mean / expected - 1.0).abs() < 2e-3, "{name}: ratio {mean} vs {expected}");
-        assert!(worst < 1e-2, "{name}: ratio off by {worst}");
+        assert!((mean / expected - 1.0).abs() < 5e-3, "{name}: ratio {mean} vs {expected}");
+        assert!(worst < 5e-2, "{name}: ratio off by {worst}");
     }
+    let rho = RopeMaterial::steel_6x36_iwrc(0.01).section().linear_density;
+    let between = rho * 9.81 * (std::f64::consts::PI * 0.506 + 1.2);
     for (a, b) in [(0.5, 2.0), (6.5, 8.0), (12.5, 14.0)] {
         let w = window(a, b);
+        // The drum's `contact_force` probe holds the rope between the two
+        // tension probes up: both tensions and its weight.
+        let last = w.last().unwrap();
+        let (drum, down) = (DVec3::new(last[7], last[8], last[9]), last[1] + last[2] + between);
+        println!("holding {a}–{b} s: force on the drum {drum} N vs (0, −{down:.3}, 0)");
+        assert!((drum.y / -down - 1.0).abs() < 1e-4 && drum.x.abs() < 1e-3 * down && drum.z.abs() < 1e-6 * down, "drum {drum} vs {down}");
         let (lo, hi) = w.iter().map(|r| r[1] / r[2]).fold((f64::INFINITY, 0.0f64), |(l, h), x| (l.min(x), h.max(x)));
         let moved = w.iter().map(|r| (r[4] - w[0][4]).abs()).fold(0.0f64, f64::max);
         println!("holding {a}–{b} s: ratio {lo:.5}–{hi:.5}, ball moved {moved:e} m");

@@ -3,6 +3,7 @@
 
 use bevy_rapier_cable::scenario;
 use bevy_rapier_cable::sim::World;
+use glam::DVec3;
 use std::path::Path;
 
 #[path = "common/irvine.rs"]
@@ -839,4 +840,11 @@ fn payload_set_down_scenario_rests_on_the_ground() {
     assert!(tilt < 1e-4, "tilt {tilt}°");
     assert!(still < 1e-9, "moved {still}");
     assert!(tension.abs() < 0.01 * 1000.0 * 9.81, "tension {tension}");
+    // The body `contact_force` probes: the ground holds the crate up with
+    // its weight (within 1e-3: the slack rope's last element rests on the
+    // crate too), and the crate pushes the ground down as much.
+    let (on_crate, on_ground) = (DVec3::new(last[8], last[9], last[10]), DVec3::new(last[11], last[12], last[13]));
+    println!("contact force on the crate {on_crate} N, on the ground {on_ground} N");
+    assert!((on_crate.y / (1000.0 * 9.81) - 1.0).abs() < 1e-3 && on_crate.x.abs() < 1e-6 && on_crate.z.abs() < 1e-6, "on the crate: {on_crate}");
+    assert!((on_crate + on_ground).length() < 1e-9 * on_crate.length(), "on the ground: {on_ground}");
 }

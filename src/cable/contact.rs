@@ -23,24 +23,31 @@
 //! a steel contact is as stable at the frame step as the rope's own
 //! springs.
 //!
-//! [`CoulombFriction`] adds Coulomb friction with a stick state at the sphere's
-//! contact point `c = p − r n`, as OrcaFlex's seabed friction does: a
+//! [`CoulombFriction`] adds Coulomb friction with a stick state at the
+//! sphere's contact point `c = p − r n` (or its centre), as OrcaFlex's
+//! seabed friction does: a
 //! tangential spring–damper `F_t = −k_t P (c − a) − c_t P ċ` (`P = I − n nᵀ`)
 //! toward an anchor `a` on the obstacle's surface (the "friction target"),
-//! capped at `μ F_n`. While `|F_t| ≤ μ F_n` the contact sticks: the anchor
+//! capped at `μ F_n` (with `F_n` bounded by the contact's normal force at
+//! the end of the previous step, [`CoulombFriction::normal_bound`]). While
+//! `|F_t| ≤ μ F_n` the contact sticks: the anchor
 //! stays where it is, and a rope on a slope below `atan μ` holds on the
 //! spring's static deflection `μ F_n / k_t` at most (micrometres for steel)
 //! and does not creep. Past it the contact slips with `|F_t| = μ F_n`
 //! against the trial force's direction, and after the step the anchor is
 //! moved to where the spring alone gives that force
 //! ([`SphereContact::next_anchor`]), which the caller keeps for the next
-//! step. The contact point is a material point of the sphere, turning
-//! with its link, and the friction force acts there, so it also puts the
-//! moment `(−r n) × F_t` on the link: a ball rolls without stretching the
-//! spring, a rope turns.
+//! step. With [`CoulombFriction::at_surface`] the spring stretches with
+//! the slip of the sphere's material at the contact point `−r n` from its
+//! centre (its displacement plus its turn times that arm), and the
+//! friction force acts there, so it also puts the moment `(−r n) × F_t`
+//! on the link: a ball rolls without stretching the spring. Without it
+//! (the coupling's choice for rope elements) the friction acts at the
+//! centre and the sphere does not roll.
 
 use glam::{DMat3, DVec3};
 
+use super::chain::rotation_vector;
 use super::force::{ForceElement, PointState, PointWrench};
 use super::spatial::{skew, M6};
 
@@ -173,11 +180,32 @@ pub struct CoulombFriction {
     /// contact's `time`, moving with it, world, m.
     pub anchor: DVec3,
     /// The link's orientation (link frame to world) at the contact's
-    /// `time`: the sphere's contact point `c = p + R Rₜᵀ (−r n)` is a
-    /// material point of the sphere that turns with the link (`R` its
-    /// orientation now, `Rₜ` this one), so a ball that rolls does not
-    /// stretch the stick spring and one that spins in place does.
+    /// `time`. The slip since then is that of the sphere's material at the
+    /// contact point `−r n` from its centre, `Δp + Δθ × (−r n)` with `Δθ`
+    /// the rotation vector of `R Rₜᵀ` (`R` the orientation now, `Rₜ` this
+    /// one): exact for a turn about a fixed axis, so a ball that rolls,
+    /// however far in a step, does not stretch the stick spring, and one
+    /// that spins in place does.
     pub frame: DMat3,
+    /// The link's angular velocity at the contact's `time`, world, rad/s:
+    /// with the one now it tells how many whole turns the link made in the
+    /// step, which its orientation alone cannot (a 16 mm rope rolling at
+    /// 4.5 m/s turns 9 rad in a 1/60 s step).
+    pub spin: DVec3,
+    /// The normal force the friction limit may use, N (the contact's at
+    /// the end of the previous step; 0 for a new contact): the limit is
+    /// `μ min(F_n, normal_bound)`. Frozen for the step, the limit does not
+    /// grow with the normal force inside it, whose coupling the slipping
+    /// tangent cannot carry (see the module docs): a rope landing on a
+    /// slope slipped at a limit growing with the impact and Newton failed
+    /// at any split of the step.
+    pub normal_bound: f64,
+    /// Whether the friction acts at the sphere's contact point `−r n` from
+    /// its centre (`true`, [`CoulombFriction::from_law`]'s choice: a ball
+    /// rolls, its moment `(−r n) × F_t` turning it), or at the centre
+    /// (`false`: what the coupling gives a rope element, which then does
+    /// not roll; see docs/architecture.md "Contact").
+    pub at_surface: bool,
 }
 
 impl CoulombFriction {
@@ -185,14 +213,29 @@ impl CoulombFriction {
     /// the stick spring is the law's own stiffness at its damping depth,
     /// `e K d_max^(e−1)`, damped by its `C_max`, so the stick state is as
     /// stiff and as damped as the contact's resting normal direction.
-    /// `anchor` (m, world) and `frame`: see [`CoulombFriction::anchor`]
-    /// and [`CoulombFriction::frame`].
-    pub fn from_law(coefficient: f64, law: &ImpactLaw, anchor: DVec3, frame: DMat3) -> Result<Self, ContactError> {
+    /// `anchor` (m, world): see [`CoulombFriction::anchor`]; `start`: the
+    /// link point's state at the contact's time (its orientation and
+    /// angular velocity are [`CoulombFriction::frame`] and
+    /// [`CoulombFriction::spin`]); `normal_bound` N: see
+    /// [`CoulombFriction::normal_bound`].
+    pub fn from_law(coefficient: f64, law: &ImpactLaw, anchor: DVec3, start: &PointState, normal_bound: f64) -> Result<Self, ContactError> {
         if !(coefficient >= 0.0 && coefficient.is_finite()) {
             return Err(ContactError::OutOfRange { name: "friction coefficient", value: coefficient, range: ">= 0" });
         }
         let stiffness = law.exponent * law.stiffness * law.damping_depth.powf(law.exponent - 1.0);
-        Ok(CoulombFriction { coefficient, stiffness, damping: law.max_damping, anchor, frame })
+        if normal_bound.is_nan() || normal_bound < 0.0 {
+            return Err(ContactError::OutOfRange { name: "normal bound", value: normal_bound, range: ">= 0 N" });
+        }
+        Ok(CoulombFriction {
+            coefficient,
+            stiffness,
+            damping: law.max_damping,
+            anchor,
+            frame: start.rotation,
+            spin: start.angular_velocity,
+            normal_bound,
+            at_surface: true,
+        })
     }
 }
 
@@ -245,23 +288,26 @@ impl SphereContact {
             Some(x) if x.direction == DVec3::ZERO => x.stretch,
             Some(x) => -x.force / friction.stiffness,
         };
-        Some(at.point - self.normal * self.radius - stretch)
+        let arm = if friction.at_surface { self.normal * self.radius } else { DVec3::ZERO };
+        Some(at.point - arm - stretch)
     }
 
     /// The tangential part at normal force `normal` (N); `None` without
     /// friction or without contact.
     fn tangential(&self, t: f64, at: &PointState, normal: f64) -> Option<Tangential> {
         let friction = self.friction?;
-        let limit = friction.coefficient * normal;
+        let limit = friction.coefficient * normal.min(friction.normal_bound);
         if limit <= 0.0 {
             return None;
         }
         let n = self.normal;
-        let arm = at.rotation * (friction.frame.transpose() * (-n * self.radius));
+        let arm = if friction.at_surface { -n * self.radius } else { DVec3::ZERO };
+        let estimate = (friction.spin + at.angular_velocity) * (0.5 * (t - self.time));
+        let turn = unwrap_turn(rotation_vector(&(at.rotation * friction.frame.transpose())), estimate);
         let anchor = friction.anchor + self.velocity * (t - self.time);
         let slip = at.velocity + at.angular_velocity.cross(arm) - self.velocity;
         let project = |x: DVec3| x - n * x.dot(n);
-        let stretch = project(at.point + arm - anchor);
+        let stretch = project(at.point + arm + turn.cross(arm) - anchor);
         let trial = -(stretch * friction.stiffness + project(slip) * friction.damping);
         let size = trial.length();
         Some(if size <= limit {
@@ -287,7 +333,21 @@ impl SphereContact {
     }
 }
 
-/// The tangents of a force `F(c, ċ)` at `c = p + δθ × a` (the arm `a`
+/// The turn `rv` (a rotation vector, `|rv| ≤ π`) plus the whole turns
+/// about its axis that bring it nearest to `estimate` (rad; the mean
+/// angular velocity times the time since the start).
+fn unwrap_turn(rv: DVec3, estimate: DVec3) -> DVec3 {
+    let angle = rv.length();
+    let axis = if angle > 1e-12 { rv / angle } else { estimate.normalize_or_zero() };
+    let turns = ((estimate.dot(axis) - angle) / std::f64::consts::TAU).round();
+    if turns == 0.0 {
+        rv
+    } else {
+        axis * (angle + std::f64::consts::TAU * turns)
+    }
+}
+
+/// The tangents of a force `F(c, ċ)` at `c = p + a + δθ × a` (the arm `a`
 /// fixed in the world for the step) with `−∂F/∂c = m`, and its moment
 /// `a × F` about the link point: blocks over (rotation, point) of
 /// `−∂(a × F, F)/∂(δθ, δp)` (symmetric when `m` is).
@@ -317,9 +377,8 @@ impl ForceElement for SphereContact {
             // force to the normal one is left out of the tangent (the
             // solve would only take its symmetric part, which is
             // indefinite), so Newton converges linearly while slipping.
-            // The moment arm's own turn (a term `[F]×[a]×`, not
-            // symmetric, of the size of the friction force times the
-            // radius) is left out as well.
+            // The turn's tangent is taken at a small turn since the step's
+            // start (the rotation vector's own derivative left out).
             let d = x.direction;
             let tangent = DMat3::IDENTITY - nn - DMat3::from_cols(d * d.x, d * d.y, d * d.z);
             w.force += x.force;

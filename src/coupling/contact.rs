@@ -96,13 +96,18 @@ enum Site {
 /// across a still capstan wrap swinging ±5 %).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct FrictionMemory {
-    /// Each site's anchor at the cable's time (world, m) and its
-    /// fraction along the element (0 at a node or a body).
-    anchors: HashMap<Site, (DVec3, f64)>,
+    /// Each site's anchor at the cable's time (world, m), its fraction
+    /// along the element (0 at a node or a body) and its normal force at
+    /// the end of the last step (N).
+    anchors: HashMap<Site, (DVec3, f64, f64)>,
     /// This step's contacts, in the order of their force elements: the
     /// site, the contact, its fraction along its element and its friction
     /// coefficient.
     step: Vec<(Site, SphereContact, f64, f64)>,
+    /// The bodies in each of this step's contacts, in the same order
+    /// (kept after the step, for the bodies' `contact_force`): the
+    /// obstacle's body and, for a carried body's touch point, that body.
+    bodies: Vec<[Option<rp::RigidBodyHandle>; 2]>,
 }
 
 impl FrictionMemory {
@@ -118,16 +123,34 @@ impl FrictionMemory {
     /// added): at `site`, `fraction` along its element, with the friction
     /// coefficient `mu` (none if 0). [`FrictionMemory::attach`] gives it
     /// its friction.
-    fn note(&mut self, site: Site, contact: SphereContact, mu: f64, fraction: f64) -> SphereContact {
+    fn note(&mut self, site: Site, contact: SphereContact, mu: f64, fraction: f64, bodies: [Option<rp::RigidBodyHandle>; 2]) -> SphereContact {
         self.step.push((site, contact, fraction, mu));
+        self.bodies.push(bodies);
         contact
     }
 
+    /// The force (N, world) the contacts put on `body`, given each
+    /// contact's force on its sphere in order: that force where `body`
+    /// carries the sphere (a carried body's touch point), its opposite
+    /// where `body` is the obstacle.
+    pub(crate) fn force_on(&self, body: rp::RigidBodyHandle, forces: impl Iterator<Item = DVec3>) -> DVec3 {
+        self.bodies.iter().zip(forces).fold(DVec3::ZERO, |sum, ([obstacle, own], f)| {
+            if *own == Some(body) {
+                sum + f
+            } else if *obstacle == Some(body) {
+                sum - f
+            } else {
+                sum
+            }
+        })
+    }
+
     /// Gives each contact noted this step (force elements `fixed..` of
-    /// `cable`, at the step's start) its friction: the anchor its site had
-    /// at the end of the last step (if it was at the same fraction along
-    /// its element), else the contact point now, and the link's
-    /// orientation now as its frame.
+    /// `cable`, at the step's start) its friction: the anchor and the
+    /// normal force its site had at the end of the last step (if it was at
+    /// the same fraction along its element), else the contact point now
+    /// and no friction this step, and the link's orientation now as its
+    /// frame.
     pub(crate) fn attach(&mut self, cable: &mut Cable, fixed: usize) {
         let points: Vec<PointState> = cable.model.chain.force_element_points().skip(fixed).collect();
         let forces = cable.model.chain.forces_mut();
@@ -135,9 +158,14 @@ impl FrictionMemory {
             if *mu <= 0.0 {
                 continue;
             }
-            let kept = self.anchors.get(site).filter(|x| x.1 == *fraction).map(|x| x.0);
-            let anchor = kept.unwrap_or(at.point - contact.normal * contact.radius);
-            if let Ok(friction) = CoulombFriction::from_law(*mu, &contact.law, anchor, at.rotation) {
+            let kept = self.anchors.get(site).filter(|x| x.1 == *fraction);
+            // A rope element's friction acts at its centreline (it does not
+            // roll), a carried body's at its touch point's surface.
+            let at_surface = matches!(site, Site::Body { .. });
+            let arm = if at_surface { contact.normal * contact.radius } else { DVec3::ZERO };
+            let anchor = kept.map_or(at.point - arm, |x| x.0);
+            let normal = kept.map_or(0.0, |x| x.2);
+            if let Ok(friction) = CoulombFriction::from_law(*mu, &contact.law, anchor, &at, normal).map(|f| CoulombFriction { at_surface, ..f }) {
                 *contact = contact.with_friction(friction);
                 forces[fixed + k].element = Arc::new(*contact);
             }
@@ -147,12 +175,14 @@ impl FrictionMemory {
     /// After the step: each contact's anchor for the next one, from the
     /// points of this step's contact force elements at time `t` (s).
     pub(crate) fn remember(&mut self, t: f64, points: impl Iterator<Item = PointState>) {
-        self.anchors = self.step.drain(..).zip(points).filter_map(|((site, c, f, _), at)| c.next_anchor(t, &at).map(|a| (site, (a, f)))).collect();
+        self.anchors =
+            self.step.drain(..).zip(points).filter_map(|((site, c, f, _), at)| c.next_anchor(t, &at).map(|a| (site, (a, f, c.normal_force(t, &at))))).collect();
     }
 
     /// Forgets this step's contacts (a step that was not taken).
     pub(crate) fn discard_step(&mut self) {
         self.step.clear();
+        self.bodies.clear();
     }
 }
 
@@ -280,20 +310,22 @@ impl<'a> Obstacle<'a> {
 /// The surface point of `shape` nearest to `p` (collider frame, m), its
 /// outward unit normal there, and the signed distance of `p` along it
 /// (negative inside). A face's normal is its own (a cuboid's face normal
-/// exactly); elsewhere the direction from the surface point to `p`.
+/// exactly); at an edge or a vertex, and on shapes without feature
+/// normals, the direction from the surface point to `p`.
 fn nearest(shape: &dyn rp::Shape, p: DVec3) -> Option<(DVec3, DVec3, f64)> {
     let (proj, feature) = shape.project_local_point_and_get_feature(p.as_vec3());
     let q = proj.point.as_dvec3();
+    let d = if proj.is_inside { q - p } else { p - q };
+    // An edge's or a vertex's "normal" from parry is the mean of its faces'
+    // (a cuboid edge's 45° diagonal whatever side the point is on): a rope
+    // resting on a knife edge was pushed along it and slid off. The plane
+    // normal to `p − q` through the nearest point supports the convex
+    // shape there instead. A point on the surface itself keeps the
+    // feature's.
+    let face = matches!(feature, rapier3d::parry::shape::FeatureId::Face(_));
     let normal = match shape.feature_normal_at_point(feature, proj.point) {
-        Some(n) => n.as_dvec3().normalize(),
-        None => {
-            let d = p - q;
-            if proj.is_inside {
-                -d.normalize()
-            } else {
-                d.normalize()
-            }
-        }
+        Some(n) if face || d.length() < 1e-9 => n.as_dvec3().normalize(),
+        _ => d.normalize(),
     };
     normal.is_finite().then(|| (q, normal, (p - q).dot(normal)))
 }
@@ -349,7 +381,7 @@ pub(crate) fn add_contacts(
             let mu = combine(contact.friction, co.friction() as f64, rp::CoefficientCombineRule::Average, co.friction_combine_rule());
             let site = |site: usize| Site::Rope { rope, site, obstacle: obstacle.handle };
             let mut add = |memory: &mut FrictionMemory, at: usize, s: f64, hit, fraction| {
-                let c = memory.note(site(at), obstacle.contact(hit, radius, contact.law), mu, fraction);
+                let c = memory.note(site(at), obstacle.contact(hit, radius, contact.law), mu, fraction, [obstacle.collider.parent(), None]);
                 hits.push((s, c));
             };
             let near = |i: usize| {
@@ -504,7 +536,7 @@ pub(crate) fn add_body_contacts(
                         continue;
                     };
                     let site = Site::Body { collider: *own, point, obstacle: obstacle.handle };
-                    let element = memory.note(site, obstacle.contact(hit, *radius, law), mu, 0.0);
+                    let element = memory.note(site, obstacle.contact(hit, *radius, law), mu, 0.0, [co.parent(), Some(c.body)]);
                     hits.push(AttachedForce { link: c.place.link, local_point: c.place.origin + c.place.rotation * *q, element: Arc::new(element) });
                 }
             }
@@ -518,4 +550,35 @@ pub(crate) fn add_body_contacts(
 /// Drops the force elements past `keep` (the last step's contacts).
 pub(crate) fn clear(cable: &mut Cable, keep: usize) {
     cable.model.chain.forces_mut().truncate(keep);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The nearest point on a cuboid: a face's own normal; at an edge or a
+    /// corner the direction from the nearest point to the query point (a
+    /// plane that supports the box there), not parry's mean of the faces.
+    #[test]
+    fn an_edge_or_a_corner_pushes_along_the_nearest_direction_and_a_face_along_its_normal() {
+        let cuboid = rp::SharedShape::cuboid(0.025, 2.0, 5.0);
+        // Straight above the top face.
+        let (q, n, d) = nearest(&*cuboid, DVec3::new(0.01, 2.3, 0.0)).unwrap();
+        assert!((n - DVec3::Y).length() < 1e-12 && (q.y - 2.0).abs() < 1e-6 && (d - 0.3).abs() < 1e-6, "face: {q} {n} {d}");
+        // Above, just beyond the top-right edge (x = 0.025): the edge is
+        // nearest, 10 mm away almost straight down.
+        let p = DVec3::new(0.026, 2.01, 0.0);
+        let (q, n, d) = nearest(&*cuboid, p).unwrap();
+        let expected = (p - q).normalize();
+        assert!((q - DVec3::new(0.025, 2.0, 0.0)).length() < 1e-6, "edge point {q}");
+        assert!((n - expected).length() < 1e-12 && n.y > 0.99, "edge normal {n} (parry's diagonal would be 0.707)");
+        assert!((d - (p - q).length()).abs() < 1e-12, "edge distance {d}");
+        // Beyond a corner.
+        let p = DVec3::new(0.03, 2.02, 5.01);
+        let (q, n, _) = nearest(&*cuboid, p).unwrap();
+        assert!((q - DVec3::new(0.025, 2.0, 5.0)).length() < 1e-6 && (n - (p - q).normalize()).length() < 1e-12, "corner: {q} {n}");
+        // Inside, nearest to the right face: that face's normal.
+        let (_, n, d) = nearest(&*cuboid, DVec3::new(0.02, 0.0, 0.0)).unwrap();
+        assert!((n - DVec3::X).length() < 1e-12 && (d + 0.005).abs() < 1e-6, "inside: {n} {d}");
+    }
 }

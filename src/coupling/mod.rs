@@ -368,6 +368,18 @@ pub struct CoupledCable {
 }
 
 impl CoupledCable {
+    /// The force (N, world; normal and friction) of this cable's contacts
+    /// on rapier body `body` now: its ropes pressing on the body's
+    /// colliders, and, if the chain carries it, its own colliders' touch
+    /// points on fixed and kinematic colliders. Rapier's own contacts
+    /// (with dynamic bodies) are not counted.
+    pub fn contact_force_on(&self, body: rp::RigidBodyHandle) -> DVec3 {
+        let ch = &self.cable.model.chain;
+        let t = self.cable.time();
+        let forces = ch.forces().iter().zip(ch.force_element_points()).skip(self.fixed_forces).map(|(f, at)| f.element.wrench(t, &at).force);
+        self.friction.force_on(body, forces)
+    }
+
     /// The role of `body` in this cable, if it is attached.
     pub fn role_of(&self, body: rp::RigidBodyHandle) -> Option<Role> {
         self.all_roles().find(|(b, _)| *b == body).map(|(_, r)| *r)

@@ -66,7 +66,7 @@ use super::components::{BodyExact, CableAnchor, CableDescriptor, CableError, Cab
 use super::{CableSettings, CableSystems};
 use crate::cable::{BodyInChain, Cable, RopeMaterial, RopeSection, RopeView};
 use crate::coupling::set_velocity_drive;
-use crate::coupling::Role;
+use crate::coupling::{CoupledCable, Role};
 use crate::integrate::{Scheme, SchemeParams};
 use crate::scenario::{BodyKind, CableEnd, Drive, Location, Quantity, Scenario};
 use crate::sim::probe::{self, Probe, ProbeSource};
@@ -477,6 +477,9 @@ struct View<'a> {
     handles: HashMap<&'a str, RigidBodyHandle>,
     /// Rail joint name → the chain of the trolley on it.
     rails: HashMap<&'a str, &'a Cable>,
+    /// The coupled cables, in the core's build order (for the bodies'
+    /// contact forces).
+    coupled: Vec<&'a CoupledCable>,
 }
 
 impl<'a> View<'a> {
@@ -520,7 +523,8 @@ impl<'a> View<'a> {
                 }
             }
         }
-        View { run, chains: own.iter().map(|(_, s)| &s.coupled.cable).collect(), ropes: by_name, carried, bodies, handles: body_handles, rails }
+        let coupled = own.iter().map(|(_, s)| &s.coupled).collect();
+        View { run, chains: own.iter().map(|(_, s)| &s.coupled.cable).collect(), ropes: by_name, carried, bodies, handles: body_handles, rails, coupled }
     }
 }
 
@@ -554,6 +558,10 @@ impl ProbeSource for View<'_> {
             }
             None => (DVec3::NAN, DMat3::NAN, DVec3::NAN, DVec3::NAN),
         }
+    }
+
+    fn body_contact_force(&self, name: &str) -> DVec3 {
+        self.handles.get(name).map_or(DVec3::ZERO, |&h| self.coupled.iter().fold(DVec3::ZERO, |sum, c| sum + c.contact_force_on(h)))
     }
 
     fn joint(&self, name: &str, quantity: Quantity) -> Probe {

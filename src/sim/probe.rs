@@ -31,6 +31,9 @@ pub(crate) trait ProbeSource {
     /// Body `name`: origin (m), orientation, velocity (m/s), angular
     /// velocity (rad/s), world frame.
     fn body_state(&self, name: &str) -> (DVec3, DMat3, DVec3, DVec3);
+    /// Body `name`'s contact force: the sum over the cables of
+    /// [`CoupledCable::contact_force_on`](crate::coupling::CoupledCable::contact_force_on), N, world.
+    fn body_contact_force(&self, name: &str) -> DVec3;
     /// A joint probe's value (see the module docs of `world.rs`).
     fn joint(&self, name: &str, quantity: Quantity) -> Probe;
 }
@@ -48,6 +51,7 @@ pub(crate) fn probe(src: &dyn ProbeSource, p: &scenario::Probe) -> Probe {
                 _ => Probe::Scalar(e(Cable::energy) + ke + pe),
             }
         }
+        ProbeTarget::Body(name) if p.quantity == Quantity::ContactForce => Probe::Vector(src.body_contact_force(name)),
         ProbeTarget::Body(name) => {
             let (pos, rot, vel, w) = src.body_state(name);
             Probe::Vector(match p.quantity {

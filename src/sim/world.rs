@@ -116,13 +116,14 @@
 //!
 //! ## Refused
 //! Anything this runner would simulate wrongly is reported with the file
-//! position (exit status 2): winches, wind and water, a body's
-//! `contact_force` probe (a cable's is the sum of its contacts' normal
-//! forces), winch probes, a cable `end` clamped to a spinning body or to a
-//! dynamic rapier body (the end spring's orientation hold has a fixed
-//! target), a `force` probe on an undriven rapier joint, and joints whose
-//! anchors are not the same point at t = 0. Cables do not touch colliders
-//! yet (contact is a later issue).
+//! position (exit status 2): winches, wind and water, winch probes, a
+//! cable `end` clamped to a spinning body or to a dynamic rapier body (the
+//! end spring's orientation hold has a fixed target), a `force` probe on
+//! an undriven rapier joint, and joints whose anchors are not the same
+//! point at t = 0. A cable's `contact_force` probe is the sum of its
+//! contacts' normal forces; a body's is the force (normal and friction,
+//! world) of the cables' contacts on it
+//! ([`CoupledCable::contact_force_on`](crate::coupling::CoupledCable::contact_force_on)).
 
 use super::probe::Probe;
 use super::rapier::RapierWorld;
@@ -394,8 +395,7 @@ impl World {
             return Err(unsupported(Location { line: 0, col: 0 }, "[environment] wind / water".into()));
         }
         for p in &scenario.probes {
-            let body_contact = matches!(p.quantity, Quantity::ContactForce) && !matches!(p.target, ProbeTarget::Cable(_));
-            if body_contact || matches!(p.target, ProbeTarget::Winch(_)) {
+            if matches!(p.target, ProbeTarget::Winch(_)) {
                 return Err(unsupported(p.location, format!("probe `{}` ({})", p.name, p.quantity.name())));
             }
         }
@@ -690,6 +690,10 @@ impl super::probe::ProbeSource for World {
 
     fn body_state(&self, name: &str) -> (DVec3, DMat3, DVec3, DVec3) {
         World::body_state(self, name)
+    }
+
+    fn body_contact_force(&self, name: &str) -> DVec3 {
+        self.rapier.body(name).map_or(DVec3::ZERO, |b| self.core.cables.iter().fold(DVec3::ZERO, |sum, c| sum + c.contact_force_on(b.handle)))
     }
 
     fn joint(&self, name: &str, quantity: Quantity) -> Probe {
