@@ -1,9 +1,10 @@
 //! Cost of contact (issue 12), thread CPU time: one 1/60 s step of a free
 //! steel rope (20 mm) of N = 100 and 1 000 elements lying on a fixed ground
-//! box (every node in contact), against the same rope with
-//! `contacts = false` and no gravity (at rest in the same place, no
-//! contact elements; with gravity it would fall for ever). Each is
-//! settled for 1 s before timing. `docs/performance.md` reports the ratio
+//! box (every node in contact), with friction (μ = 0.4 on both, what the
+//! defaults 0.3 and 0.5 combine to) and frictionless (0 on both), against the same
+//! rope with `contacts = false` and no gravity (at rest in the same place,
+//! no contact elements; with gravity it would fall for ever). Each is
+//! settled for 1 s before timing. `docs/performance.md` reports the ratios
 //! and the growth from N = 100 to 1 000.
 
 use bevy_rapier_cable::scenario;
@@ -13,8 +14,10 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
 
-/// A rope of `n` elements, 0.5 m each, laid 1 mm above a ground box.
-fn world(n: usize, contacts: bool) -> World {
+/// A rope of `n` elements, 0.5 m each, laid 1 mm above a ground box, with
+/// contacts (and friction coefficient `mu` on the rope and the ground) or
+/// without.
+fn world(n: usize, contacts: Option<f64>) -> World {
     let length = 0.5 * n as f64;
     let src = format!(
         r#"
@@ -29,6 +32,7 @@ type = "fixed"
 shape = "cuboid"
 half_extents = [{half}, 0.5, 5.0]
 position = [0.0, -0.5, 0.0]
+friction = {mu}
 
 [[cable]]
 name = "rope"
@@ -36,10 +40,13 @@ length = {length}
 segments = {n}
 diameter = 0.020
 material = "steel_wire_rope_6x36_iwrc"
-contacts = {contacts}
+contacts = {on}
+friction = {mu}
 path = [[{x0}, 0.011, 0.0], [{x1}, 0.011, 0.0]]
 "#,
-        g = if contacts { -9.81 } else { 0.0 },
+        g = if contacts.is_some() { -9.81 } else { 0.0 },
+        on = contacts.is_some(),
+        mu = contacts.unwrap_or(0.0),
         half = 0.5 * length + 5.0,
         x0 = -0.5 * length,
         x1 = 0.5 * length,
@@ -55,9 +62,9 @@ path = [[{x0}, 0.011, 0.0], [{x1}, 0.011, 0.0]]
 fn contact(c: &mut Criterion<cpu_time::ThreadCpuTime>) {
     let mut g = c.benchmark_group("contact/rope_on_ground_step");
     for n in [100usize, 1000] {
-        for contacts in [true, false] {
+        for (name, contacts) in [("friction", Some(0.4)), ("frictionless", Some(0.0)), ("no_contacts", None)] {
             let mut w = world(n, contacts);
-            let id = BenchmarkId::new(if contacts { "contacts" } else { "no_contacts" }, n);
+            let id = BenchmarkId::new(name, n);
             g.bench_function(id, |b| b.iter(|| w.step().unwrap()));
         }
     }

@@ -301,9 +301,12 @@ impl SphereContact {
             return None;
         }
         let n = self.normal;
-        let arm = if friction.at_surface { -n * self.radius } else { DVec3::ZERO };
-        let estimate = (friction.spin + at.angular_velocity) * (0.5 * (t - self.time));
-        let turn = unwrap_turn(rotation_vector(&(at.rotation * friction.frame.transpose())), estimate);
+        let (arm, turn) = if friction.at_surface {
+            let estimate = (friction.spin + at.angular_velocity) * (0.5 * (t - self.time));
+            (-n * self.radius, unwrap_turn(rotation_vector(&(at.rotation * friction.frame.transpose())), estimate))
+        } else {
+            (DVec3::ZERO, DVec3::ZERO)
+        };
         let anchor = friction.anchor + self.velocity * (t - self.time);
         let slip = at.velocity + at.angular_velocity.cross(arm) - self.velocity;
         let project = |x: DVec3| x - n * x.dot(n);
