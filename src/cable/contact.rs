@@ -49,7 +49,7 @@ use glam::{DMat3, DVec3};
 
 use super::chain::rotation_vector;
 use super::force::{ForceElement, PointState, PointWrench};
-use super::spatial::{skew, M6};
+use super::spatial::{outer3, skew, M6};
 
 /// Why a contact law cannot be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -367,7 +367,7 @@ impl ForceElement for SphereContact {
             return PointWrench::default();
         }
         let n = self.normal;
-        let nn = DMat3::from_cols(n * n.x, n * n.y, n * n.z);
+        let nn = outer3(n, n);
         let mut w = PointWrench { force: n * f, ..Default::default() };
         // f = F_n(δ, δ̇) n with δ = r − (p − p₀)·n, δ̇ = −v·n:
         // −∂f/∂p = ∂F_n/∂δ n nᵀ, −∂f/∂v = ∂F_n/∂δ̇ n nᵀ.
@@ -383,7 +383,7 @@ impl ForceElement for SphereContact {
             // The turn's tangent is taken at a small turn since the step's
             // start (the rotation vector's own derivative left out).
             let d = x.direction;
-            let tangent = DMat3::IDENTITY - nn - DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+            let tangent = DMat3::IDENTITY - nn - outer3(d, d);
             w.force += x.force;
             w.moment = x.arm.cross(x.force);
             w.stiffness += at_arm(x.arm, tangent * (friction.stiffness * x.scale));

@@ -467,8 +467,6 @@ fn sample(
 /// carry, and rapier's bodies.
 struct View<'a> {
     run: &'a ScenarioRun,
-    /// The chains in the core's build order (cable entity order).
-    chains: Vec<&'a Cable>,
     /// Cable name → (its chain, rope index).
     ropes: HashMap<&'a str, (&'a Cable, usize)>,
     /// Carried body name → (its chain, its place).
@@ -477,8 +475,8 @@ struct View<'a> {
     handles: HashMap<&'a str, RigidBodyHandle>,
     /// Rail joint name → the chain of the trolley on it.
     rails: HashMap<&'a str, &'a Cable>,
-    /// The coupled cables, in the core's build order (for the bodies'
-    /// contact forces).
+    /// The coupled cables (their chains, and the bodies' contact forces),
+    /// in the core's build order (cable entity order).
     coupled: Vec<&'a CoupledCable>,
 }
 
@@ -524,13 +522,13 @@ impl<'a> View<'a> {
             }
         }
         let coupled = own.iter().map(|(_, s)| &s.coupled).collect();
-        View { run, chains: own.iter().map(|(_, s)| &s.coupled.cable).collect(), ropes: by_name, carried, bodies, handles: body_handles, rails, coupled }
+        View { run, ropes: by_name, carried, bodies, handles: body_handles, rails, coupled }
     }
 }
 
 impl ProbeSource for View<'_> {
     fn chains(&self) -> Vec<&Cable> {
-        self.chains.clone()
+        self.coupled.iter().map(|c| &c.cable).collect()
     }
 
     fn rapier_energies(&self) -> (f64, f64) {
