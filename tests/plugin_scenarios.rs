@@ -111,7 +111,7 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 21] = [
+const COMPARED: [&str; 26] = [
     "axial_bounce",
     "bend_45",
     "boom_hoist",
@@ -119,6 +119,11 @@ const COMPARED: [&str; 21] = [
     "cantilever_tip_load",
     "capstan_friction",
     "catenary",
+    "crane_pid",
+    "crane_pid_incremental",
+    "crane_pid_nonlinear",
+    "crane_zv",
+    "crane_zvd",
     "damped_drop",
     "hanging_chain",
     "hanging_payload",
@@ -160,6 +165,11 @@ same_rows!(
     cantilever_end_moment,
     cantilever_tip_load,
     catenary,
+    crane_pid,
+    crane_pid_incremental,
+    crane_pid_nonlinear,
+    crane_zv,
+    crane_zvd,
     damped_drop,
     hanging_chain,
     hanging_payload,

@@ -747,13 +747,13 @@ fn damped_drop_scenario_comes_to_rest_at_the_frame_step() {
     assert!(e_peak < 0.0 && e_peak > -0.25, "peak {e_peak:+.3}");
 }
 
-/// SCENARIO.md's `[[controller]]` is not built yet: it is refused by name
-/// at its line, pointing to what works today, instead of "unknown field".
+/// An incomplete `[[controller]]` names the missing field at its table
+/// (the entries themselves: `tests/crane_scenarios.rs`).
 #[test]
-fn a_controller_entry_is_refused_by_name() {
+fn an_incomplete_controller_entry_names_the_missing_field() {
     let src = "[simulation]\nduration = 1.0\ndt = 0.01\n\n[[controller]]\nname = \"anti_sway\"\ntype = \"zv\"\n";
     let e = scenario::parse(src, "ctl.toml").unwrap_err().to_string();
-    assert!(e.contains("ctl.toml:5:") && e.contains("`[[controller]]` is not supported in scenario files yet") && e.contains("plugin::TrolleyControl"), "{e}");
+    assert!(e.contains("ctl.toml:5:") && e.contains("missing field `joint`"), "{e}");
 }
 
 /// `rope_on_ground.toml` (issue 12): a free 10 m steel rope dropped 1 mm

@@ -130,6 +130,108 @@ impl Move {
     }
 }
 
+/// A trolley position reference: what a controller follows.
+pub trait Reference {
+    /// Reference position at time `t` (s), m.
+    fn position(&self, t: f64) -> f64;
+    /// Reference speed at time `t` (s), m/s.
+    fn speed(&self, t: f64) -> f64;
+}
+
+impl Reference for Move {
+    fn position(&self, t: f64) -> f64 {
+        Move::position(self, t)
+    }
+    fn speed(&self, t: f64) -> f64 {
+        Move::speed(self, t)
+    }
+}
+
+/// A trolley reference through waypoints `(t_i, x_i)` (s, m), as a
+/// scenario's `[[controller]] target` gives them: the trolley holds `x_0`
+/// until `t_0`; from each waypoint it moves to the next with a
+/// trapezoidal speed profile within the speed and acceleration limits, at
+/// rest at both ends. The move starts at `t_i` (or when the move before
+/// it ends, if that is later) and arrives exactly at `t_{i+1}` when the
+/// limits allow it (its cruise speed lowered to
+/// `v = 2 a d / (a T + √(a²T² − 4 a d))`, `d` the distance and `T` the time
+/// it has); when they do not, it is the time-optimal [`Move`] and arrives
+/// late. A single move given as two waypoints whose times leave enough
+/// room is exactly a [`Move`] with a lower speed limit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Waypoints {
+    start: f64,
+    moves: Vec<Move>,
+}
+
+impl Waypoints {
+    /// The reference through `points` (times strictly increasing, all
+    /// finite) within `max_speed` (m/s) and `max_acceleration` (m/s²),
+    /// both positive and finite. Refused otherwise, naming the point.
+    pub fn new(points: &[(f64, f64)], max_speed: f64, max_acceleration: f64) -> Result<Self, CraneError> {
+        let model = "waypoints";
+        check_positive(model, "max_speed", max_speed)?;
+        check_positive(model, "max_acceleration", max_acceleration)?;
+        let Some(&(_, x_first)) = points.first() else {
+            return Err(CraneError::InvalidParameter { model, field: "points", value: 0.0, requirement: "at least one point" });
+        };
+        let mut moves = Vec::new();
+        let mut free_at = f64::NEG_INFINITY;
+        let mut prev: Option<(f64, f64)> = None;
+        for &(t, x) in points {
+            if !(t.is_finite() && x.is_finite()) {
+                return Err(CraneError::InvalidParameter { model, field: "point", value: if t.is_finite() { x } else { t }, requirement: "finite" });
+            }
+            if let Some((tp, xp)) = prev {
+                if t <= tp {
+                    return Err(CraneError::InvalidParameter { model, field: "time", value: t, requirement: "strictly increasing" });
+                }
+                let d = (x - xp).abs();
+                if d > 0.0 {
+                    let t0 = tp.max(free_at);
+                    let fastest = Move { t0, start: xp, target: x, max_speed, max_acceleration };
+                    let (a, time) = (max_acceleration, t - t0);
+                    let disc = a * a * time * time - 4.0 * a * d;
+                    let mv = if time > 0.0 && disc >= 0.0 && time >= fastest.duration() {
+                        Move { max_speed: (2.0 * a * d / (a * time + disc.sqrt())).min(max_speed), ..fastest }
+                    } else {
+                        fastest
+                    };
+                    free_at = t0 + mv.duration();
+                    moves.push(mv);
+                }
+            }
+            prev = Some((t, x));
+        }
+        Ok(Waypoints { start: x_first, moves })
+    }
+
+    /// The moves between the waypoints, in time order.
+    pub fn moves(&self) -> &[Move] {
+        &self.moves
+    }
+
+    /// When the last move ends, s (−∞ without moves).
+    pub fn end_time(&self) -> f64 {
+        self.moves.last().map_or(f64::NEG_INFINITY, |m| m.t0 + m.duration())
+    }
+
+    /// The move under way (or last finished) at `t`.
+    fn active(&self, t: f64) -> Option<&Move> {
+        let i = self.moves.partition_point(|m| m.t0 <= t);
+        i.checked_sub(1).map(|i| &self.moves[i])
+    }
+}
+
+impl Reference for Waypoints {
+    fn position(&self, t: f64) -> f64 {
+        self.active(t).map_or(self.start, |m| m.position(t))
+    }
+    fn speed(&self, t: f64) -> f64 {
+        self.active(t).map_or(0.0, |m| m.speed(t))
+    }
+}
+
 /// The input shapers of the crane industry: a sequence of impulses whose
 /// convolution with a command cancels the residual sway of a pendulum of
 /// angular frequency `ω` and damping ratio `ζ` (Singer & Seering 1990).
@@ -179,24 +281,25 @@ impl InputShaper {
     }
 }
 
-/// Open-loop anti-sway: a [`Move`]'s speed profile convolved with an
+/// Open-loop anti-sway: a reference's speed profile (a [`Move`], or any
+/// [`Reference`] such as [`Waypoints`]) convolved with an
 /// [`InputShaper`], sent to a speed-controlled drive.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ShapedMove {
+pub struct ShapedMove<R = Move> {
     /// The move.
-    pub motion: Move,
+    pub motion: R,
     /// The shaper.
     pub shaper: InputShaper,
 }
 
-impl ShapedMove {
+impl<R: Reference> ShapedMove<R> {
     /// The shaped speed command at `t`, m/s.
     pub fn speed(&self, t: f64) -> f64 {
         self.shaper.impulses.iter().map(|&(ti, a)| a * self.motion.speed(t - ti)).sum()
     }
 }
 
-impl TrolleyController for ShapedMove {
+impl<R: Reference> TrolleyController for ShapedMove<R> {
     fn update(&mut self, m: &TrolleyMeasurement) -> TrolleyCommand {
         TrolleyCommand::Speed(self.speed(m.time))
     }
@@ -270,9 +373,9 @@ pub struct PidGains {
 /// measured rates (no derivative kick). Position gains in N/m, N/(m·s),
 /// N·s/m; sway gains in N/rad, N/(rad·s), N·s/rad.
 #[derive(Clone, Debug, PartialEq)]
-pub struct DoubleLoopPid {
-    /// The reference move.
-    pub motion: Move,
+pub struct DoubleLoopPid<R = Move> {
+    /// The reference move (a [`Move`], or any [`Reference`]).
+    pub motion: R,
     /// Position loop gains.
     pub position: PidGains,
     /// Sway loop gains.
@@ -325,11 +428,11 @@ fn sech(x: f64) -> f64 {
     1.0 / x.cosh()
 }
 
-impl DoubleLoopPid {
+impl<R: Reference> DoubleLoopPid<R> {
     /// A double-loop PID following `motion` with fixed gains. Refused
     /// unless `max_force` is positive (N; infinite is allowed) and every
     /// gain finite.
-    pub fn new(motion: Move, position: PidGains, sway: PidGains, max_force: f64) -> Result<Self, CraneError> {
+    pub fn new(motion: R, position: PidGains, sway: PidGains, max_force: f64) -> Result<Self, CraneError> {
         check_controller("double-loop PID", &position, &sway, max_force)?;
         Ok(DoubleLoopPid { motion, position, sway, max_force, schedule: None, integral: (0.0, 0.0), last_time: None })
     }
@@ -341,6 +444,22 @@ impl DoubleLoopPid {
         self
     }
 
+    fn gains(&self, e: f64) -> PidGains {
+        match self.schedule {
+            None => self.position,
+            Some(s) => {
+                let grow = 1.0 - sech(e / s.e_p);
+                PidGains {
+                    kp: self.position.kp * (1.0 + s.p_gain * grow),
+                    ki: self.position.ki * sech(e / s.e_i),
+                    kd: self.position.kd * (1.0 + s.d_gain * grow),
+                }
+            }
+        }
+    }
+}
+
+impl DoubleLoopPid {
     /// Gains that place the poles of the double-loop PD on the
     /// linearised crane ([`OverheadCrane::linearized`], no damping) at the
     /// two pairs `s² + 2ζ_k ω_k s + ω_k²` (ω in rad/s): with
@@ -359,23 +478,9 @@ impl DoubleLoopPid {
         let k_theta = ml * (w1 * w1 + w2 * w2 + 4.0 * z1 * z2 * w1 * w2) - kp * l - (mm + m) * g;
         (PidGains { kp, ki: 0.0, kd }, PidGains { kp: k_theta, ki: 0.0, kd: c_theta })
     }
-
-    fn gains(&self, e: f64) -> PidGains {
-        match self.schedule {
-            None => self.position,
-            Some(s) => {
-                let grow = 1.0 - sech(e / s.e_p);
-                PidGains {
-                    kp: self.position.kp * (1.0 + s.p_gain * grow),
-                    ki: self.position.ki * sech(e / s.e_i),
-                    kd: self.position.kd * (1.0 + s.d_gain * grow),
-                }
-            }
-        }
-    }
 }
 
-impl TrolleyController for DoubleLoopPid {
+impl<R: Reference> TrolleyController for DoubleLoopPid<R> {
     fn update(&mut self, m: &TrolleyMeasurement) -> TrolleyCommand {
         let dt = self.last_time.map_or(0.0, |t| (m.time - t).max(0.0));
         self.last_time = Some(m.time);
@@ -400,9 +505,9 @@ impl TrolleyController for DoubleLoopPid {
 /// clamped to `±max_force` (N) (the clamp of the accumulated output is the
 /// velocity form's built-in anti-windup).
 #[derive(Clone, Debug, PartialEq)]
-pub struct IncrementalPid {
-    /// The reference move.
-    pub motion: Move,
+pub struct IncrementalPid<R = Move> {
+    /// The reference move (a [`Move`], or any [`Reference`]).
+    pub motion: R,
     /// Position loop gains.
     pub position: PidGains,
     /// Sway loop gains.
@@ -416,18 +521,18 @@ pub struct IncrementalPid {
     next_sample: Option<f64>,
 }
 
-impl IncrementalPid {
+impl<R: Reference> IncrementalPid<R> {
     /// An incremental PID sampled every `sample_time` (s). Refused unless
     /// the sample time is positive and finite, `max_force` positive (N) and
     /// every gain finite.
-    pub fn new(motion: Move, position: PidGains, sway: PidGains, sample_time: f64, max_force: f64) -> Result<Self, CraneError> {
+    pub fn new(motion: R, position: PidGains, sway: PidGains, sample_time: f64, max_force: f64) -> Result<Self, CraneError> {
         check_controller("incremental PID", &position, &sway, max_force)?;
         check_positive("incremental PID", "sample_time", sample_time)?;
         Ok(IncrementalPid { motion, position, sway, sample_time, max_force, history: [(0.0, 0.0); 2], output: 0.0, next_sample: None })
     }
 }
 
-impl TrolleyController for IncrementalPid {
+impl<R: Reference> TrolleyController for IncrementalPid<R> {
     fn update(&mut self, m: &TrolleyMeasurement) -> TrolleyCommand {
         let due = self.next_sample.is_none_or(|t| m.time >= t - 1e-9 * self.sample_time);
         if due {

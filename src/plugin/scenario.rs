@@ -67,8 +67,10 @@ use super::{CableSettings, CableSystems};
 use crate::cable::{BodyInChain, Cable, RopeMaterial, RopeSection, RopeView};
 use crate::coupling::set_velocity_drive;
 use crate::coupling::{CoupledCable, Role};
+use crate::crane::control::TrolleyMeasurement;
 use crate::integrate::{Scheme, SchemeParams};
 use crate::scenario::{BodyKind, CableEnd, Drive, Location, Quantity, Scenario};
+use crate::sim::control::{self, ControllerRun};
 use crate::sim::probe::{self, Probe, ProbeSource};
 use crate::sim::rapier::{drive_joints, free_body_energies, joint_data, motion_pose, pose_of, shared_shape, velocity_of, RapierJoint};
 use crate::sim::{body_motion, shape_inertia, SimError, World as SimWorld};
@@ -111,6 +113,8 @@ pub struct ScenarioRun {
     rapier_joints: Option<Vec<RapierJoint>>,
     /// The joints that are rails of trolleys the cables carry.
     rails: Vec<String>,
+    /// The `[[controller]]`s (each drives a rail).
+    controllers: Vec<ControllerRun>,
 }
 
 impl ScenarioRun {
@@ -366,6 +370,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
         let e = world.spawn((Name::new(c.name.clone()), d, exact)).id();
         cables.push((c.name.clone(), e));
     }
+    let controllers = scenario.controllers.iter().map(ControllerRun::new).collect();
     world.insert_resource(ScenarioRun {
         scenario,
         bodies,
@@ -379,6 +384,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
         failed: None,
         rapier_joints: None,
         rails,
+        controllers,
     });
 }
 
@@ -402,11 +408,41 @@ fn move_kinematic(run: Res<ScenarioRun>, mut ctx: WriteRapierContext, handles: Q
 
 /// Before the cables' step: the velocity drive of a trolley's rail becomes
 /// the rail joint's motor, which the plugin reads (the same motor `cablesim`
-/// gives the chain, [`crate::coupling::velocity_drive_motor`]).
-fn drive_rails(run: Res<ScenarioRun>, mut joints: Query<&mut ImpulseJoint>) {
+/// gives the chain, [`crate::coupling::velocity_drive_motor`]); a
+/// `[[controller]]` samples when due (measuring what `cablesim` measures)
+/// and its command becomes the motor of its rail instead.
+#[allow(clippy::too_many_arguments)]
+fn drive_rails(
+    mut run: ResMut<ScenarioRun>,
+    mut joints: Query<&mut ImpulseJoint>,
+    sims: Query<&CableSim>,
+    ropes: Query<&CableRopeOf>,
+    ctx: ReadRapierContext,
+    handles: Query<&RapierRigidBodyHandle>,
+    joint_handles: Query<&RapierImpulseJointHandle>,
+) {
     let h = run.substep_length();
     let t = run.substep_time();
-    for j in run.scenario.joints.iter().filter(|j| run.rails.contains(&j.name)) {
+    if run.controllers.iter().any(|c| c.due(t)) {
+        let Ok(ctx) = ctx.single() else {
+            return;
+        };
+        let measured: Vec<Option<TrolleyMeasurement>> = {
+            let view = View::new(&run, &sims, &ropes, &ctx.rigidbody_set.bodies, &handles, &joint_handles);
+            run.controllers.iter().map(|c| c.due(t).then(|| control::measure(&view, &run.scenario, &c.spec, t))).collect()
+        };
+        for (c, m) in run.controllers.iter_mut().zip(measured) {
+            if let Some(m) = m {
+                c.sample(t, || m);
+            }
+        }
+    }
+    for c in &run.controllers {
+        if let Some(mut joint) = run.joints.get(&c.spec.joint).and_then(|e| joints.get_mut(*e).ok()) {
+            c.apply(&mut joint.data.as_mut().raw, h);
+        }
+    }
+    for j in run.scenario.joints.iter().filter(|j| run.rails.contains(&j.name) && !run.controllers.iter().any(|c| c.spec.joint == j.name)) {
         let (Some(Drive::Velocity { velocity, max_force }), Some(mut joint)) = (&j.drive, run.joints.get(&j.name).and_then(|e| joints.get_mut(*e).ok())) else {
             continue;
         };
@@ -560,6 +596,10 @@ impl ProbeSource for View<'_> {
 
     fn body_contact_force(&self, name: &str) -> DVec3 {
         self.handles.get(name).map_or(DVec3::ZERO, |&h| self.coupled.iter().fold(DVec3::ZERO, |sum, c| sum + c.contact_force_on(h)))
+    }
+
+    fn controller(&self, name: &str, quantity: Quantity) -> f64 {
+        self.run.controllers.iter().find(|c| c.spec.name == name).map_or(f64::NAN, |c| c.probe(quantity))
     }
 
     fn joint(&self, name: &str, quantity: Quantity) -> Probe {

@@ -20,6 +20,7 @@
 
 mod bodies;
 mod cables;
+mod controllers;
 mod error;
 mod probes;
 mod raw;
@@ -29,6 +30,7 @@ mod validate;
 
 use std::path::Path;
 
+pub use self::controllers::{Controller, ControllerKind, CONTROLLER_TYPES, DEFAULT_KI_RATIO, DEFAULT_POLES, DEFAULT_SCHEDULE};
 pub use self::error::ScenarioError;
 pub use self::probes::{Component, Probe, ProbeTarget, Quantity};
 pub use self::span::Location;

@@ -3,6 +3,7 @@
 
 use std::collections::{HashMap, HashSet};
 
+use super::controllers::Controller;
 use super::raw::{RawProbe, S};
 use super::span::Location;
 use super::types::{Body, Cable, Joint, JointKind, Winch};
@@ -19,6 +20,8 @@ pub enum ProbeTarget {
     Joint(String),
     /// A winch, by name.
     Winch(String),
+    /// A `[[controller]]`, by name.
+    Controller(String),
     /// The whole system.
     System,
 }
@@ -51,6 +54,13 @@ pub enum Quantity {
     Energy,
     /// System kinetic energy, J.
     KineticEnergy,
+    /// Controller: the sway angle it measured at its last sample, degrees.
+    Sway,
+    /// Controller: its last command (m/s for the shapers' speed, N for the
+    /// PIDs' force).
+    Output,
+    /// Controller: reference minus trolley position at its last sample, m.
+    Error,
 }
 
 impl Quantity {
@@ -69,6 +79,9 @@ impl Quantity {
             Quantity::Torque => "torque",
             Quantity::Energy => "energy",
             Quantity::KineticEnergy => "kinetic_energy",
+            Quantity::Sway => "sway",
+            Quantity::Output => "output",
+            Quantity::Error => "error",
         }
     }
 }
@@ -131,6 +144,7 @@ fn valid(target: &ProbeTarget) -> &'static [Quantity] {
         ProbeTarget::Cable(_) => &[Q::Position, Q::Velocity, Q::Tension, Q::Length, Q::ContactForce],
         ProbeTarget::Joint(_) => &[Q::Position, Q::Velocity, Q::Force],
         ProbeTarget::Winch(_) => &[Q::Length, Q::Speed, Q::Torque],
+        ProbeTarget::Controller(_) => &[Q::Sway, Q::Output, Q::Error],
         ProbeTarget::System => &[Q::Energy, Q::KineticEnergy],
     }
 }
@@ -141,17 +155,25 @@ pub(crate) fn is_vector(target: &ProbeTarget, q: Quantity) -> bool {
         ProbeTarget::Body(_) => true,
         ProbeTarget::Cable(_) => matches!(q, Q::Position | Q::Velocity),
         ProbeTarget::Joint(_) => q == Q::Force,
-        ProbeTarget::Winch(_) | ProbeTarget::System => false,
+        ProbeTarget::Winch(_) | ProbeTarget::Controller(_) | ProbeTarget::System => false,
     }
 }
 
 /// All `[[probe]]` tables.
-pub(crate) fn probes(ctx: &Ctx<'_>, raw: &[S<RawProbe>], bodies: &[Body], joints: &[Joint], cables: &[Cable], winches: &[Winch]) -> Res<Vec<Probe>> {
+pub(crate) fn probes(
+    ctx: &Ctx<'_>,
+    raw: &[S<RawProbe>],
+    bodies: &[Body],
+    joints: &[Joint],
+    cables: &[Cable],
+    winches: &[Winch],
+    controllers: &[Controller],
+) -> Res<Vec<Probe>> {
     let mut seen = HashMap::new();
     let mut columns = HashSet::new();
     let mut out = Vec::with_capacity(raw.len());
     for p in raw {
-        let probe = probe(ctx, p, bodies, joints, cables, winches, &mut seen)?;
+        let probe = probe(ctx, p, (bodies, joints, cables), winches, controllers, &mut seen)?;
         for c in probe.columns() {
             if c == "time" || !columns.insert(c.clone()) {
                 return Err(ctx.err(p.get_ref().name.span(), format!("probe `{}`: column `{c}` is already used (by `time` or another probe)", probe.name)));
@@ -172,10 +194,9 @@ fn unknown(ctx: &Ctx<'_>, v: &S<String>, o: &str, kind: &str, known: Vec<&str>) 
 fn probe(
     ctx: &Ctx<'_>,
     raw: &S<RawProbe>,
-    bodies: &[Body],
-    joints: &[Joint],
-    cables: &[Cable],
+    (bodies, joints, cables): (&[Body], &[Joint], &[Cable]),
     winches: &[Winch],
+    controllers: &[Controller],
     seen: &mut HashMap<String, Location>,
 ) -> Res<Probe> {
     let r = raw.get_ref();
@@ -185,7 +206,7 @@ fn probe(
 
     // Exactly one target.
     let mut targets = Vec::new();
-    for (field, v) in [("body", &r.body), ("cable", &r.cable), ("joint", &r.joint), ("winch", &r.winch)] {
+    for (field, v) in [("body", &r.body), ("cable", &r.cable), ("joint", &r.joint), ("winch", &r.winch), ("controller", &r.controller)] {
         if let Some(v) = v {
             targets.push((field, v.span()));
         }
@@ -194,7 +215,7 @@ fn probe(
         targets.push(("system", s.span()));
     }
     match targets.as_slice() {
-        [] => return Err(ctx.err(raw.span(), format!("{o}: needs exactly one target: `body`, `cable`, `joint`, `winch` or `system = true`"))),
+        [] => return Err(ctx.err(raw.span(), format!("{o}: needs exactly one target: `body`, `cable`, `joint`, `winch`, `controller` or `system = true`"))),
         [_] => {}
         [first, second, ..] => return Err(ctx.err(second.1.clone(), format!("{o}: has several targets (`{}` and `{}`); give exactly one", first.0, second.0))),
     }
@@ -222,6 +243,11 @@ fn probe(
             return Err(unknown(ctx, w, o, "winch", winches.iter().map(|x| x.name.as_str()).collect()));
         }
         ProbeTarget::Winch(w.get_ref().clone())
+    } else if let Some(c) = &r.controller {
+        if !controllers.iter().any(|x| &x.name == c.get_ref()) {
+            return Err(unknown(ctx, c, o, "controller", controllers.iter().map(|x| x.name.as_str()).collect()));
+        }
+        ProbeTarget::Controller(c.get_ref().clone())
     } else {
         ProbeTarget::System
     };

@@ -95,10 +95,8 @@ pub(crate) struct RawScenario {
     pub winch: Vec<S<RawWinch>>,
     #[serde(default)]
     pub probe: Vec<S<RawProbe>>,
-    /// `[[controller]]` (SCENARIO.md): read so that it can be refused by
-    /// name (not built yet).
     #[serde(default)]
-    pub controller: Vec<S<toml::Value>>,
+    pub controller: Vec<S<RawController>>,
 }
 
 /// `[simulation]`.
@@ -266,8 +264,37 @@ pub(crate) struct RawProbe {
     pub cable: Option<S<String>>,
     pub joint: Option<S<String>>,
     pub winch: Option<S<String>>,
+    pub controller: Option<S<String>>,
     pub system: Option<S<bool>>,
     pub quantity: S<String>,
     pub s: Option<S<f64>>,
     pub component: Option<S<String>>,
+}
+
+/// `[[controller]]`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawController {
+    pub name: S<String>,
+    #[serde(rename = "type")]
+    pub kind: S<String>,
+    pub joint: S<String>,
+    pub cable: S<String>,
+    pub target: S<Datum>,
+    pub max_speed: Option<S<f64>>,
+    pub max_acceleration: Option<S<f64>>,
+    pub max_force: Option<S<f64>>,
+    pub frequency: Option<S<f64>>,
+    pub damping: Option<S<f64>>,
+    pub sample_time: Option<S<f64>>,
+    pub kp: Option<S<f64>>,
+    pub ki: Option<S<f64>>,
+    pub kd: Option<S<f64>>,
+    pub sway_kp: Option<S<f64>>,
+    pub sway_ki: Option<S<f64>>,
+    pub sway_kd: Option<S<f64>>,
+    pub p_gain: Option<S<f64>>,
+    pub d_gain: Option<S<f64>>,
+    pub e_p: Option<S<f64>>,
+    pub e_i: Option<S<f64>>,
 }

@@ -31,6 +31,8 @@ pub struct Scenario {
     pub environment: Environment,
     /// `[[winch]]` tables in file order.
     pub winches: Vec<Winch>,
+    /// `[[controller]]` tables in file order.
+    pub controllers: Vec<super::Controller>,
     /// `[[probe]]` tables in file order (= results.csv column order).
     pub probes: Vec<Probe>,
 }

@@ -244,12 +244,6 @@ pub(crate) fn list<S: AsRef<str>>(names: &[S]) -> String {
 /// Validate the whole file.
 pub(crate) fn validate(ctx: &Ctx<'_>, file: &Path, raw: RawScenario) -> Res<Scenario> {
     let simulation = simulation(ctx, &raw.simulation)?;
-    if let Some(c) = raw.controller.first() {
-        return Err(ctx.err(
-            c.span(),
-            "`[[controller]]` is not supported in scenario files yet: drive the trolley's rail with a joint `drive` (a velocity table can carry a shaped move), or use `crane::control` from Rust or `plugin::TrolleyControl` in a Bevy app (docs/control.md)",
-        ));
-    }
     let environment = match &raw.environment {
         Some(env) => environment(ctx, env.get_ref())?,
         None => Environment::default(),
@@ -258,8 +252,9 @@ pub(crate) fn validate(ctx: &Ctx<'_>, file: &Path, raw: RawScenario) -> Res<Scen
     let joints = super::bodies::joints(ctx, &raw.joint, &bodies)?;
     let cables = super::cables::cables(ctx, &raw.cable, &bodies)?;
     let winches = super::cables::winches(ctx, &raw.winch, &cables)?;
-    let probes = super::probes::probes(ctx, &raw.probe, &bodies, &joints, &cables, &winches)?;
-    Ok(Scenario { file: file.to_path_buf(), simulation, bodies, joints, cables, environment, winches, probes })
+    let controllers = super::controllers::controllers(ctx, &raw.controller, &simulation, &bodies, &joints, &cables)?;
+    let probes = super::probes::probes(ctx, &raw.probe, &bodies, &joints, &cables, &winches, &controllers)?;
+    Ok(Scenario { file: file.to_path_buf(), simulation, bodies, joints, cables, environment, winches, controllers, probes })
 }
 
 /// Most steps (frames × sub-steps) a scenario may ask for: 10⁸, about a

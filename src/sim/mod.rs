@@ -8,6 +8,8 @@
 //! this module holds only the static-solve settings that the runner and the
 //! plugin share ([`STATIC_TOLERANCE`], [`STATIC_MAX_ITERATIONS`]).
 #[cfg(feature = "sim")]
+pub(crate) mod control;
+#[cfg(feature = "sim")]
 pub(crate) mod probe;
 #[cfg(feature = "sim")]
 pub(crate) mod rapier;

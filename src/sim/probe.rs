@@ -36,6 +36,8 @@ pub(crate) trait ProbeSource {
     fn body_contact_force(&self, name: &str) -> DVec3;
     /// A joint probe's value (see the module docs of `world.rs`).
     fn joint(&self, name: &str, quantity: Quantity) -> Probe;
+    /// A `[[controller]]` probe's value ([`super::control::ControllerRun::probe`]).
+    fn controller(&self, name: &str, quantity: Quantity) -> f64;
 }
 
 /// The value of probe `p`.
@@ -79,6 +81,7 @@ pub(crate) fn probe(src: &dyn ProbeSource, p: &scenario::Probe) -> Probe {
         }
         ProbeTarget::Joint(name) => src.joint(name, p.quantity),
         ProbeTarget::Winch(_) => Probe::Scalar(f64::NAN),
+        ProbeTarget::Controller(name) => Probe::Scalar(src.controller(name, p.quantity)),
     }
 }
 

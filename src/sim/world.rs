@@ -125,11 +125,13 @@
 //! world) of the cables' contacts on it
 //! ([`CoupledCable::contact_force_on`](crate::coupling::CoupledCable::contact_force_on)).
 
+use super::control::{self, ControllerRun};
 use super::probe::Probe;
 use super::rapier::RapierWorld;
 use super::{STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};
 use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
 use crate::coupling::{rail_motor, velocity_drive_motor, Attach, BodyInputs, BodyMotion, CableContact, CableSpec, Coupling, CouplingError, Role};
+use crate::crane::control::TrolleyMeasurement;
 use crate::integrate::{Scheme, SchemeParams, Substeps};
 use crate::scenario::{self, BodyKind, CableEnd, Drive, Location, ProbeTarget, Quantity, Scenario, Shape};
 use glam::{DMat3, DVec3};
@@ -290,6 +292,9 @@ pub struct World {
     /// Notes about the run that are not errors: explicit couplings beyond
     /// their estimated stability limit (see the module docs).
     pub warnings: Vec<String>,
+    /// The `[[controller]]`s and, for each, the index of the cable whose
+    /// trolley rail it drives.
+    controllers: Vec<(ControllerRun, usize)>,
 }
 
 /// The closed-form motion of a fixed or kinematic scenario body (its
@@ -556,7 +561,24 @@ impl World {
                 ));
             }
         }
-        Ok(World { scenario, core, names, rapier, motions: Motions(motions), time: 0.0, steps: 0, substeps, warnings })
+        let mut controllers = Vec::with_capacity(scenario.controllers.len());
+        for c in &scenario.controllers {
+            let Some(i) = names.iter().position(|n| n.slide.as_ref().is_some_and(|(j, _)| *j == c.joint)) else {
+                return Err(unsupported(
+                    c.location,
+                    format!(
+                        "controller `{}` on joint `{}`, which no cable carries as a trolley's rail (rapier keeps it); a controller drives the rail of a trolley whose cable starts on it",
+                        c.name, c.joint
+                    ),
+                ));
+            };
+            // The controller replaces the rail's `drive`.
+            if let Some(slide) = names[i].slide.as_mut() {
+                slide.1 = None;
+            }
+            controllers.push((ControllerRun::new(c), i));
+        }
+        Ok(World { scenario, core, names, rapier, motions: Motions(motions), time: 0.0, steps: 0, substeps, warnings, controllers })
     }
 
     /// Advances the world by one frame `dt` in `substeps` sub-steps, each:
@@ -568,6 +590,21 @@ impl World {
         let t0 = self.time;
         for k in 0..self.substeps {
             let t = t0 + k as f64 * h;
+            if self.controllers.iter().any(|(c, _)| c.due(t)) {
+                let measured: Vec<Option<TrolleyMeasurement>> =
+                    self.controllers.iter().map(|(c, _)| c.due(t).then(|| control::measure(&*self, &self.scenario, &c.spec, t))).collect();
+                for ((c, _), m) in self.controllers.iter_mut().zip(measured) {
+                    if let Some(m) = m {
+                        c.sample(t, || m);
+                    }
+                }
+            }
+            for (c, i) in &self.controllers {
+                let cc = &mut self.core.cables[*i];
+                if let Some((_, Role::Trolley { offset, .. })) = cc.roles[0] {
+                    rail_motor(cc, Some(c.motor(h)), offset);
+                }
+            }
             for (cc, n) in self.core.cables.iter_mut().zip(&self.names) {
                 match &n.slide {
                     Some((_, Some(Drive::Force { force }))) => {
@@ -694,6 +731,10 @@ impl super::probe::ProbeSource for World {
 
     fn body_contact_force(&self, name: &str) -> DVec3 {
         self.rapier.body(name).map_or(DVec3::ZERO, |b| self.core.cables.iter().fold(DVec3::ZERO, |sum, c| sum + c.contact_force_on(b.handle)))
+    }
+
+    fn controller(&self, name: &str, quantity: Quantity) -> f64 {
+        self.controllers.iter().find(|(c, _)| c.spec.name == name).map_or(f64::NAN, |(c, _)| c.probe(quantity))
     }
 
     fn joint(&self, name: &str, quantity: Quantity) -> Probe {
