@@ -54,6 +54,9 @@
 //! rail becomes the rail joint's motor, which the plugin reads (the law
 //! both runners share, `coupling::rail_motor`); the drives of joints rapier
 //! keeps are applied to rapier before its step by `cablesim`'s own code.
+//! A `[[controller]]` samples through the same code as in `cablesim`
+//! (`sim::control`) before the cables' step, and its command becomes its
+//! rail joint's motor (replacing the rail's `drive`).
 //!
 //! **Not yet spawned** (refused with [`SimError::Unsupported`] naming the
 //! item): a `force` table on a trolley's rail (`cablesim` applies it as the
