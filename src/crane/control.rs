@@ -623,3 +623,134 @@ impl<C: TrolleyController> OverheadCraneLoop<C> {
         Ok(LoopSample { measurement, force })
     }
 }
+
+/// What a tower crane controller reads at a sample (the coordinates of
+/// [`TowerCrane`](super::TowerCrane) and their rates).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TowerMeasurement {
+    /// Time, s.
+    pub time: f64,
+    /// Slew angle `γ`, rad, and its rate, rad/s.
+    pub slew: (f64, f64),
+    /// Trolley radius `x`, m, and its rate, m/s.
+    pub radius: (f64, f64),
+    /// Sway `α` in the jib's plane (positive outward), rad, and its rate.
+    pub radial_sway: (f64, f64),
+    /// Sway `β` out of the jib's plane (positive toward growing `γ`), rad,
+    /// and its rate.
+    pub tangential_sway: (f64, f64),
+}
+
+/// Slew and trolley of a tower crane under feedback together: two
+/// double-loop PIDs ([`DoubleLoopPid`]). About rest at radius `x₀` the
+/// linearised tower crane (see [`TowerCrane`](super::TowerCrane)) splits
+/// into two overhead cranes: along the jib, the trolley `M` with the
+/// payload `m` on `l` and the radial sway `α`; across it, in arc length
+/// `s = x₀ γ`, a "trolley" of `J/x₀² + M` with the tangential sway `β`,
+/// driven by `F_t = T/x₀`. Each loop follows its own reference (the slew
+/// in arc length, the radius in metres) and damps its own sway; the slew
+/// loop's force becomes the torque `T = x₀ F_t`. The radial loop also takes
+/// out the centripetal swing `x γ̇²` a slew gives, which shaping the slew
+/// command cannot (docs/control.md).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TowerCranePid {
+    /// The slew loop, in arc length at the design radius (m, N).
+    pub slew: DoubleLoopPid,
+    /// The trolley loop (m, N).
+    pub trolley: DoubleLoopPid,
+    /// The design radius `x₀`, m.
+    pub radius: f64,
+}
+
+impl TowerCranePid {
+    /// The loops for a slew `slew` (a [`Move`] in radians, rad/s, rad/s²)
+    /// and a trolley move `trolley` (m), at the design radius `radius`
+    /// (m, positive), with the closed-loop poles of both linearised axes at
+    /// `poles` (as [`DoubleLoopPid::place_poles`]; `ki` = `ki_ratio · kp`,
+    /// 1/s), the slew torque limited to `max_torque` (N·m) and the trolley
+    /// force to `max_force` (N).
+    #[allow(clippy::too_many_arguments)]
+    pub fn place_poles(
+        crane: &super::TowerCrane,
+        radius: f64,
+        slew: Move,
+        trolley: Move,
+        poles: [(f64, f64); 2],
+        ki_ratio: f64,
+        max_torque: f64,
+        max_force: f64,
+    ) -> Result<Self, CraneError> {
+        check_positive("tower crane PID", "radius", radius)?;
+        let with_gravity = |mut c: OverheadCrane| {
+            c.gravity = crane.gravity;
+            c
+        };
+        let radial = with_gravity(OverheadCrane::new(crane.trolley_mass, crane.payload_mass, crane.rope_length)?);
+        let across = with_gravity(OverheadCrane::new(crane.jib_inertia / (radius * radius) + crane.trolley_mass, crane.payload_mass, crane.rope_length)?);
+        let gains = |c: &OverheadCrane| {
+            let (mut p, s) = DoubleLoopPid::place_poles(c, poles);
+            p.ki = ki_ratio * p.kp;
+            (p, s)
+        };
+        let arc = Move {
+            t0: slew.t0,
+            start: radius * slew.start,
+            target: radius * slew.target,
+            max_speed: radius * slew.max_speed,
+            max_acceleration: radius * slew.max_acceleration,
+        };
+        let (sp, ss) = gains(&across);
+        let (tp, ts) = gains(&radial);
+        Ok(TowerCranePid { slew: DoubleLoopPid::new(arc, sp, ss, max_torque / radius)?, trolley: DoubleLoopPid::new(trolley, tp, ts, max_force)?, radius })
+    }
+
+    /// `(slew torque N·m, trolley force N)` for the sample `m`.
+    pub fn update(&mut self, m: &TowerMeasurement) -> (f64, f64) {
+        let x0 = self.radius;
+        let across =
+            TrolleyMeasurement { time: m.time, position: x0 * m.slew.0, velocity: x0 * m.slew.1, sway: m.tangential_sway.0, sway_rate: m.tangential_sway.1 };
+        let along = TrolleyMeasurement { time: m.time, position: m.radius.0, velocity: m.radius.1, sway: m.radial_sway.0, sway_rate: m.radial_sway.1 };
+        let force = |c: TrolleyCommand| match c {
+            TrolleyCommand::Force(f) | TrolleyCommand::Speed(f) => f,
+        };
+        (x0 * force(self.slew.update(&across)), force(self.trolley.update(&along)))
+    }
+}
+
+/// A [`TowerCranePid`] closing the loop on the reduced
+/// [`TowerCrane`](super::TowerCrane), sampled every step.
+pub struct TowerCraneLoop {
+    /// The plant.
+    pub system: LagrangeSystem<super::TowerCrane>,
+    /// Its state `[γ, x, α, β]`.
+    pub state: State,
+    /// The controller.
+    pub controller: TowerCranePid,
+    integrator: Integrator,
+}
+
+impl TowerCraneLoop {
+    /// The crane at rest at slew angle `slew` (rad) and radius `radius`
+    /// (m), hanging still.
+    pub fn new(crane: super::TowerCrane, controller: TowerCranePid, slew: f64, radius: f64) -> Result<Self, CraneError> {
+        let mut system = crane.system();
+        let state = State::new(&mut system, 0.0, vec![slew, radius, 0.0, 0.0], vec![0.0; 4])?;
+        Ok(TowerCraneLoop { system, state, controller, integrator: Integrator::default() })
+    }
+
+    /// The current measurement.
+    pub fn measurement(&self) -> TowerMeasurement {
+        let (q, v) = (&self.state.q, &self.state.v);
+        TowerMeasurement { time: self.state.t, slew: (q[0], v[0]), radius: (q[1], v[1]), radial_sway: (q[2], v[2]), tangential_sway: (q[3], v[3]) }
+    }
+
+    /// One control sample and one step of `h` s; returns the commands.
+    pub fn step(&mut self, h: f64) -> Result<(f64, f64), CraneError> {
+        let m = self.measurement();
+        let (torque, force) = self.controller.update(&m);
+        self.system.model.slew_torque = torque;
+        self.system.model.trolley_force = force;
+        self.integrator.step(&mut self.system, &mut self.state, h)?;
+        Ok((torque, force))
+    }
+}

@@ -10,8 +10,9 @@
 //! * [`Hoist`]: the 3-mass, 2-DOF hoisting mechanism (drive, boom tip,
 //!   payload on the rope) and its dynamic load factor;
 //! * [`control`]: anti-sway controllers (ZV/ZVD input shaping, the double
-//!   closed-loop, nonlinear and incremental PIDs) and a closed loop on the
-//!   reduced overhead crane;
+//!   closed-loop, nonlinear and incremental PIDs, slew and trolley of a
+//!   tower crane together) and closed loops on the reduced overhead and
+//!   tower cranes;
 //! * [`lagrange`]: the machinery that derives their equations of motion from
 //!   the positions of their point masses ([`PointMassModel`], [`LagrangeSystem`]).
 //!
