@@ -733,8 +733,15 @@ impl TowerCraneLoop {
     /// The crane at rest at slew angle `slew` (rad) and radius `radius`
     /// (m), hanging still.
     pub fn new(crane: super::TowerCrane, controller: TowerCranePid, slew: f64, radius: f64) -> Result<Self, CraneError> {
+        // With a hoist, the rope starts at its length (the hoist's pull is
+        // left as the crane has it).
+        let mut q = vec![slew, radius, 0.0, 0.0];
+        if crane.hoist.is_some() {
+            q.push(crane.rope_length);
+        }
+        let n = q.len();
         let mut system = crane.system();
-        let state = State::new(&mut system, 0.0, vec![slew, radius, 0.0, 0.0], vec![0.0; 4])?;
+        let state = State::new(&mut system, 0.0, q, vec![0.0; n])?;
         Ok(TowerCraneLoop { system, state, controller, integrator: Integrator::default() })
     }
 

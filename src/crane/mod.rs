@@ -31,7 +31,7 @@ pub use forestry::ForestryCrane;
 pub use hoist::{Hoist, HoistDrive};
 pub use lagrange::{Jet, LagrangeSystem, PointMassModel};
 pub use overhead::OverheadCrane;
-pub use tower::TowerCrane;
+pub use tower::{TowerCrane, TowerHoist};
 
 use thiserror::Error;
 

@@ -19,6 +19,11 @@ use super::{check_positive, CraneError};
 ///
 /// `(M + m) ẍ + m l α̈ = F_x`, `l α̈ + ẍ + g α = 0`,
 /// `(J + (M + m) x²) γ̈ + m l x β̈ = T`, `l β̈ + x γ̈ + g β = 0`.
+///
+/// With a [`TowerHoist`] ([`TowerCrane::with_hoist`]) the rope length is
+/// a fifth coordinate, `q = [γ, x, α, β, l]`: the hoist pays the rope out
+/// and hauls it in against the payload (its drum's inertia referred to
+/// the rope, its pull, its damping), and the swing follows the length.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TowerCrane {
     /// Slewing inertia of the jib, counterjib and slewing gear about the
@@ -39,6 +44,21 @@ pub struct TowerCrane {
     /// Viscous damping of the slew (N·m·s/rad), the trolley (N·s/m) and
     /// both sway angles (N·m·s/rad).
     pub damping: [f64; 3],
+    /// The hoist, when the rope length is a coordinate (`None`: the rope
+    /// length is fixed at [`TowerCrane::rope_length`]).
+    pub hoist: Option<TowerHoist>,
+}
+
+/// The hoist of a [`TowerCrane`]: the rope length `l` as a coordinate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TowerHoist {
+    /// Drum, gear and motor inertia referred to the rope, `J_d / r²`, kg.
+    pub drum_mass: f64,
+    /// The hoist's pull on the rope, N (positive hauls in, shortening the
+    /// rope; `m g` holds the payload at rest).
+    pub force: f64,
+    /// Viscous damping of the rope's motion, N·s/m.
+    pub damping: f64,
 }
 
 impl TowerCrane {
@@ -49,7 +69,29 @@ impl TowerCrane {
         check_positive("tower crane", "trolley_mass", trolley_mass)?;
         check_positive("tower crane", "payload_mass", payload_mass)?;
         check_positive("tower crane", "rope_length", rope_length)?;
-        Ok(TowerCrane { jib_inertia, trolley_mass, payload_mass, rope_length, gravity: 9.81, slew_torque: 0.0, trolley_force: 0.0, damping: [0.0; 3] })
+        Ok(TowerCrane {
+            jib_inertia,
+            trolley_mass,
+            payload_mass,
+            rope_length,
+            gravity: 9.81,
+            slew_torque: 0.0,
+            trolley_force: 0.0,
+            damping: [0.0; 3],
+            hoist: None,
+        })
+    }
+
+    /// The same crane with a hoist: the rope length becomes the fifth
+    /// coordinate (its value at rest `rope_length`), the drum's inertia
+    /// referred to the rope `drum_mass` (kg, ≥ 0, finite), the pull set to
+    /// hold the payload (`m g`), no damping.
+    pub fn with_hoist(mut self, drum_mass: f64) -> Result<Self, CraneError> {
+        if !(drum_mass.is_finite() && drum_mass >= 0.0) {
+            return Err(CraneError::InvalidParameter { model: "tower crane", field: "drum_mass", value: drum_mass, requirement: "at least 0 and finite" });
+        }
+        self.hoist = Some(TowerHoist { drum_mass, force: self.payload_mass * self.gravity, damping: 0.0 });
+        Ok(self)
     }
 
     /// Small-swing angular frequency of `α` (in the jib plane) at rest with
@@ -88,21 +130,25 @@ impl LagrangeSystem<TowerCrane> {
 
 impl PointMassModel for TowerCrane {
     fn dof(&self) -> usize {
-        4
+        if self.hoist.is_some() {
+            5
+        } else {
+            4
+        }
     }
     fn masses(&self) -> Vec<f64> {
         vec![self.trolley_mass, self.payload_mass]
     }
     fn coordinate_inertia(&self, i: usize) -> f64 {
-        if i == 0 {
-            self.jib_inertia
-        } else {
-            0.0
+        match (i, self.hoist) {
+            (0, _) => self.jib_inertia,
+            (4, Some(h)) => h.drum_mass,
+            _ => 0.0,
         }
     }
     fn positions(&self, q: &[Jet], out: &mut [[Jet; 3]]) {
         let (cg, sg) = (q[0].cos(), q[0].sin());
-        let l = self.rope_length;
+        let l = if self.hoist.is_some() { q[4] } else { Jet::constant(self.rope_length) };
         // Radial and tangential distances, and the height.
         let (sa, ca, sb, cb) = (q[2].sin(), q[2].cos(), q[3].sin(), q[3].cos());
         let radial = q[1] + sa * cb * l;
@@ -119,5 +165,9 @@ impl PointMassModel for TowerCrane {
         out[1] = self.trolley_force - self.damping[1] * v[1];
         out[2] = -self.damping[2] * v[2];
         out[3] = -self.damping[2] * v[3];
+        if let Some(h) = self.hoist {
+            // Hauling in shortens the rope.
+            out[4] = -h.force - h.damping * v[4];
+        }
     }
 }
