@@ -485,3 +485,94 @@ fn tower_crane_hoist_conserves_energy_and_keeps_the_adiabatic_invariant() {
     assert!((state.q[4] - (l0 - haul)).abs() < 1e-3, "rope at {}", state.q[4]);
     assert!((ratio / closed - 1.0).abs() < 0.01, "swing ratio {ratio} vs {closed}");
 }
+
+/// `crane::linearize` (every model's linearisation from its own nonlinear
+/// residual): on the overhead crane it gives `OverheadCrane::linearized`'s
+/// hand-written matrices (damping included) within 1e-7; on the tower
+/// crane at 20 m the mass matrix of REFERENCE.md §6 and the stiffness
+/// `diag(0, 0, m g l, m g l)`, and on the forestry crane
+/// `diag(0, m g l, m g l)`, each with `det(K − ω² M) = 0` at the
+/// closed-form frequencies (relative to `det(ω² M)`, within 1e-6); with
+/// the tower's hoist held by `m g`, the rope length adds the inertia
+/// `m + m_d` and no stiffness.
+#[test]
+fn every_crane_model_linearises_to_its_closed_form() {
+    let close = |a: &[f64], b: &[f64], tol: f64, what: &str| {
+        let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() <= tol * scale, "{what}: {a:?} vs {b:?}");
+        }
+    };
+    // Overhead crane, with damping.
+    let crane = OverheadCrane::new(500.0, 1000.0, 10.0).unwrap().with_damping(30.0, 200.0);
+    let hand = crane.linearized().unwrap();
+    let generic = linearize(&mut crane.system(), 0.0, &[0.0, 0.0]).unwrap();
+    close(generic.mass(), hand.mass(), 1e-7, "overhead mass");
+    close(generic.damping(), hand.damping(), 1e-7, "overhead damping");
+    close(generic.stiffness(), hand.stiffness(), 1e-7, "overhead stiffness");
+    // det(K − ω² M) for an n × n system, by Gaussian elimination.
+    let det = |sys: &bevy_rapier_cable::integrate::DenseSystem, w: f64| -> (f64, f64) {
+        let n = (sys.mass().len() as f64).sqrt() as usize;
+        let mut a: Vec<f64> = sys.stiffness().iter().zip(sys.mass()).map(|(k, m)| k - w * w * m).collect();
+        let mut scaled: Vec<f64> = sys.mass().iter().map(|m| w * w * m).collect();
+        let mut d = [1.0, 1.0];
+        for (k, mat) in [&mut a, &mut scaled].into_iter().enumerate() {
+            for c in 0..n {
+                let p = (c..n).max_by(|&i, &j| mat[i * n + c].abs().total_cmp(&mat[j * n + c].abs())).unwrap();
+                if p != c {
+                    for x in 0..n {
+                        mat.swap(c * n + x, p * n + x);
+                    }
+                    d[k] = -d[k];
+                }
+                let piv = mat[c * n + c];
+                d[k] *= piv;
+                if piv == 0.0 {
+                    break;
+                }
+                for r in c + 1..n {
+                    let f = mat[r * n + c] / piv;
+                    for x in c..n {
+                        mat[r * n + x] -= f * mat[c * n + x];
+                    }
+                }
+            }
+        }
+        (d[0], d[1])
+    };
+    // Tower crane at radius 20 m.
+    let (j, mm, m, l, x) = (2e5, 800.0, 2000.0, 15.0, 20.0);
+    let tower = TowerCrane::new(j, mm, m, l).unwrap();
+    let (wr, wt) = (tower.radial_frequency(), tower.tangential_frequency(x));
+    let lin = linearize(&mut tower.clone().system(), 0.0, &[0.3, x, 0.0, 0.0]).unwrap();
+    let mgl = m * G * l;
+    let expected_mass = [j + (mm + m) * x * x, 0.0, 0.0, m * l * x, 0.0, mm + m, m * l, 0.0, 0.0, m * l, m * l * l, 0.0, m * l * x, 0.0, 0.0, m * l * l];
+    close(lin.mass(), &expected_mass, 1e-9, "tower mass");
+    close(lin.stiffness(), &[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, mgl, 0.0, 0.0, 0.0, 0.0, mgl], 1e-7, "tower stiffness");
+    for (name, w) in [("tower radial", wr), ("tower tangential", wt)] {
+        let (d, s) = det(&lin, w);
+        println!("{name}: det(K − ω²M)/det(ω²M) = {:.1e} at the closed-form ω = {w:.6} rad/s", d / s);
+        assert!((d / s).abs() < 1e-6, "{name}: {}", d / s);
+    }
+    // A frequency off by 1 % is not a root.
+    assert!((det(&lin, 1.01 * wr).0 / det(&lin, 1.01 * wr).1).abs() > 1e-3);
+    // Forestry crane.
+    let (mf, mb, lf) = (300.0, 1500.0, 6.0);
+    let lin = linearize(&mut ForestryCrane::new(mf, mb, lf).unwrap().system(), 0.0, &[0.0; 3]).unwrap();
+    let k = mb * G * lf;
+    close(lin.stiffness(), &[0.0, 0.0, 0.0, 0.0, k, 0.0, 0.0, 0.0, k], 1e-7, "forestry stiffness");
+    for (name, w) in [("forestry in plane", (G * (mf + mb) / (mf * lf)).sqrt()), ("forestry across", (G / lf).sqrt())] {
+        let (d, s) = det(&lin, w);
+        println!("{name}: det(K − ω²M)/det(ω²M) = {:.1e}", d / s);
+        assert!((d / s).abs() < 1e-6, "{name}: {}", d / s);
+    }
+    // The tower's hoist held by m g.
+    let hoisted = tower.with_hoist(300.0).unwrap();
+    let lin = linearize(&mut hoisted.system(), 0.0, &[0.3, x, 0.0, 0.0, l]).unwrap();
+    assert!((lin.mass()[24] - (m + 300.0)).abs() < 1e-9 * m, "hoist inertia {}", lin.mass()[24]);
+    assert!(
+        lin.stiffness()[20..25].iter().chain([4usize, 9, 14, 19].iter().map(|&i| &lin.stiffness()[i])).all(|k| k.abs() < 1e-6 * mgl),
+        "hoist stiffness {:?}",
+        lin.stiffness()
+    );
+}

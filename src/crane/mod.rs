@@ -16,8 +16,9 @@
 //! * [`lagrange`]: the machinery that derives their equations of motion from
 //!   the positions of their point masses ([`PointMassModel`], [`LagrangeSystem`]).
 //!
-//! Each model gives its closed-form small-swing frequencies and its
-//! linearisation; `tests/crane_models.rs` checks the nonlinear equations
+//! Each model gives its closed-form small-swing frequencies, and
+//! [`linearize`] its linearisation about rest from its own nonlinear
+//! residual; `tests/crane_models.rs` checks the nonlinear equations
 //! against both and against energy and momentum conservation.
 
 pub mod control;
@@ -108,4 +109,57 @@ impl TrolleyDrive {
             TrolleyDrive::Speed { command, gain, max_force } => limit(gain * (command - speed), max_force),
         }
     }
+}
+
+/// The linearisation of `sys` about rest at `q0` (an equilibrium: zero
+/// velocity and acceleration there) at time `t`:
+/// `M Δq̈ + C Δq̇ + K Δq = 0` with `M = ∂r/∂a` (exact: the residual is
+/// linear in the acceleration), `C = ∂r/∂v` and `K = ∂r/∂q` by central
+/// differences of the nonlinear residual `r = M(q) a − Q(t, q, v)` (steps
+/// of 1e-6 of each coordinate's scale). Every reduced model has its
+/// linearisation this way, from its own nonlinear equations.
+pub fn linearize<S: crate::integrate::SecondOrderSystem + ?Sized>(sys: &mut S, t: f64, q0: &[f64]) -> Result<crate::integrate::DenseSystem, CraneError> {
+    let n = sys.dof();
+    if q0.len() != n || !q0.iter().all(|x| x.is_finite()) {
+        return Err(CraneError::InvalidParameter {
+            model: "linearisation",
+            field: "q0",
+            value: q0.len() as f64,
+            requirement: "one finite value per coordinate",
+        });
+    }
+    let zero = vec![0.0; n];
+    let mut eval = |q: &[f64], v: &[f64], a: &[f64]| -> Result<Vec<f64>, CraneError> {
+        let mut r = vec![0.0; n];
+        sys.residual(t, q, v, a, &mut r).map_err(|source| crate::integrate::IntegrateError::System { t, source })?;
+        Ok(r)
+    };
+    let r0 = eval(q0, &zero, &zero)?;
+    let (mut mass, mut damping, mut stiffness) = (vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]);
+    for j in 0..n {
+        let eps = 1e-6 * q0[j].abs().max(1.0);
+        let unit = |x: f64| {
+            let mut e = zero.clone();
+            e[j] = x;
+            e
+        };
+        let ra = eval(q0, &zero, &unit(1.0))?;
+        let (rqp, rqm) = (eval(&add(q0, &unit(eps)), &zero, &zero)?, eval(&add(q0, &unit(-eps)), &zero, &zero)?);
+        let (rvp, rvm) = (eval(q0, &unit(eps), &zero)?, eval(q0, &unit(-eps), &zero)?);
+        for i in 0..n {
+            mass[i * n + j] = ra[i] - r0[i];
+            stiffness[i * n + j] = (rqp[i] - rqm[i]) / (2.0 * eps);
+            damping[i * n + j] = (rvp[i] - rvm[i]) / (2.0 * eps);
+        }
+    }
+    crate::integrate::DenseSystem::new(n, mass, damping, stiffness).map_err(|_| CraneError::InvalidParameter {
+        model: "linearisation",
+        field: "matrices",
+        value: f64::NAN,
+        requirement: "finite",
+    })
+}
+
+fn add(a: &[f64], b: &[f64]) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| x + y).collect()
 }
