@@ -576,3 +576,53 @@ fn every_crane_model_linearises_to_its_closed_form() {
         lin.stiffness()
     );
 }
+
+/// The 3-mass hoist (drum J = 50 kg·m², r_e = 0.25 m, boom tip 100 kg on
+/// k_b = 4e6 N/m, rope k = 2e6 N/m, 10 t) held by the static torque
+/// `r_e m g`, hanging: `linearize` gives REFERENCE.md §7's matrices in
+/// `(φ, y_b, y_p)` (`M = diag(J, m_b, m)`, `K` from `½k_b y_b² + ½k(r_e φ +
+/// y_b − y_p)²`) within 1e-7, with a zero mode (drum and payload turning
+/// and falling together) and the rope–boom modes; undamped, a swing of
+/// the payload keeps `T + V − T_hold φ` constant (RK4 at 0.1 ms, 5 s, the
+/// rope taut throughout, ≤ 1e-9 relative).
+#[test]
+fn hoist_linearises_to_its_closed_form_and_conserves_energy() {
+    let (j, re, mb, kb, k, m) = (50.0, 0.25, 100.0, 4e6, 2e6, 1e4);
+    let hold = re * m * G;
+    let hoist = Hoist::new(j, re, mb, kb, k, m).unwrap().with_drive(HoistDrive::Torque(hold));
+    let q0 = hoist.hanging(4.0);
+    let mut sys = hoist.clone();
+    let lin = linearize(&mut sys, 0.0, &q0).unwrap();
+    let expected_k = [k * re * re, k * re, -k * re, k * re, k + kb, -k, -k * re, -k, k];
+    let expected_m = [j, 0.0, 0.0, 0.0, mb, 0.0, 0.0, 0.0, m];
+    for (what, got, want) in [("mass", lin.mass(), &expected_m[..]), ("stiffness", lin.stiffness(), &expected_k[..])] {
+        let scale = want.iter().fold(0.0f64, |s, x| s.max(x.abs()));
+        for (a, b) in got.iter().zip(want) {
+            assert!((a - b).abs() < 1e-7 * scale, "hoist {what}: {got:?} vs {want:?}");
+        }
+    }
+    // The zero mode: K is singular (drum and payload moving together).
+    let kk = lin.stiffness();
+    let det = kk[0] * (kk[4] * kk[8] - kk[5] * kk[7]) - kk[1] * (kk[3] * kk[8] - kk[5] * kk[6]) + kk[2] * (kk[3] * kk[7] - kk[4] * kk[6]);
+    let size = (k * re * re) * (k + kb) * k;
+    assert!(det.abs() < 1e-6 * size, "det K = {det:e} of {size:e}");
+    // Energy with the holding torque's potential −T φ.
+    let energy = |q: &[f64], v: &[f64]| {
+        let e = re * q[0] + q[1] - q[2] - hoist.slack;
+        0.5 * j * v[0] * v[0] + 0.5 * mb * v[1] * v[1] + 0.5 * m * v[2] * v[2] + 0.5 * kb * q[1] * q[1] + 0.5 * k * e.max(0.0).powi(2) + m * G * q[2]
+            - hold * q[0]
+    };
+    let mut state = State::new(&mut sys, 0.0, q0.clone(), vec![0.0, 0.0, 0.05]).unwrap();
+    let e0 = energy(&state.q, &state.v);
+    let scale = 0.5 * m * 0.05 * 0.05;
+    let mut integrator = rk4();
+    let (mut de, mut least) = (0.0f64, f64::INFINITY);
+    while state.t < 5.0 - 1e-12 {
+        integrator.step(&mut sys, &mut state, 1e-4).unwrap();
+        de = de.max((energy(&state.q, &state.v) - e0).abs() / scale);
+        least = least.min(sys.rope_force(&state.q, &state.v));
+    }
+    println!("hoist held by its static torque: linearisation as REFERENCE.md §7; energy drift {de:.2e} of the swing's over 5 s, least rope force {least:.0} N");
+    assert!(least > 0.0, "the rope went slack");
+    assert!(de < 1e-9, "energy drift {de:e}");
+}
