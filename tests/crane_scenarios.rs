@@ -83,7 +83,7 @@ fn run_full(text: &str) -> Vec<(f64, f64, f64, f64)> {
 /// law: a speed loop of `M/dt`).
 fn run_reduced(c: &Controller, rope: f64, duration: f64) -> Vec<(f64, f64, f64, f64)> {
     let crane = OverheadCrane::with_rope_mass(500.0, 1000.0, rope + 0.3, density(), rope).unwrap();
-    let controller: Box<dyn TrolleyController + Send + Sync> = c.build();
+    let controller: Box<dyn TrolleyController + Send + Sync> = c.build().unwrap();
     let sampled = Sampled { inner: controller, period: c.sample_time, next: 0.0, last: None };
     let mut lp = OverheadCraneLoop::new(crane, sampled, 0.0, 500.0 * 60.0, c.max_force).unwrap();
     let mut rows = Vec::new();
@@ -209,7 +209,7 @@ fn controller_waypoints_arrive_on_time_within_the_limits() {
     let sc = scenario::load(std::path::Path::new("assets/scenarios/crane_pid.toml")).unwrap();
     let c = &sc.controllers[0];
     assert_eq!(c.target, vec![(1.0, 0.0), (15.0, 10.0)]);
-    let r = c.reference();
+    let r = c.reference().unwrap();
     assert_eq!((r.position(0.5), r.position(15.0), r.position(30.0)), (0.0, 10.0, 10.0));
     // The 14 s the waypoints leave are the time-optimal trapezoid's.
     assert!((r.speed(8.0) - 1.0).abs() < 1e-12 && (r.speed(2.0) - 0.25).abs() < 1e-12);
@@ -259,6 +259,12 @@ fn bad_controllers_are_refused_by_name() {
     let text = base.replace("start = { body = \"trolley\", anchor = [0.0, 0.0, 0.0] }", "start = { world = [0.0, 0.0, 0.0] }");
     let e = scenario::parse(&text, "crane.toml").unwrap_err().to_string();
     assert!(e.contains("cable `hoist` must start on the trolley `trolley`"), "{e}");
+    // A controller changed after validation is refused by the runner, not
+    // a panic.
+    let mut sc = scenario::parse(&base, "crane.toml").unwrap();
+    sc.controllers[0].max_speed = -1.0;
+    let e = World::new(sc).unwrap_err().to_string();
+    assert!(e.contains("controller `anti_sway`") && e.contains("max_speed = -1"), "{e}");
     // A controller replaces the rail's drive (the file's drive is ignored).
     let with_drive = base.replace("axis = [1.0, 0.0, 0.0]\n", &format!("axis = [1.0, 0.0, 0.0]\n{UNSHAPED}\n")).replace("duration = 40.0", "duration = 2.0");
     let plain = base.replace("duration = 40.0", "duration = 2.0");
@@ -351,7 +357,7 @@ fn the_closed_loops_catch_a_pushed_payload_in_a_bevy_app_as_the_reduced_model_do
 #[cfg(feature = "app")]
 fn run_reduced_pushed(c: &Controller, duration: f64, at: f64, impulse: f64) -> Vec<(f64, f64, f64)> {
     let crane = OverheadCrane::with_rope_mass(500.0, 1000.0, 10.3, density(), 10.0).unwrap();
-    let sampled = Sampled { inner: c.build(), period: c.sample_time, next: 0.0, last: None };
+    let sampled = Sampled { inner: c.build().unwrap(), period: c.sample_time, next: 0.0, last: None };
     let mut lp = OverheadCraneLoop::new(crane, sampled, 0.0, 500.0 * 60.0, c.max_force).unwrap();
     let mut rows = Vec::new();
     let mut pushed = false;

@@ -373,7 +373,8 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
         let e = world.spawn((Name::new(c.name.clone()), d, exact)).id();
         cables.push((c.name.clone(), e));
     }
-    let controllers = scenario.controllers.iter().map(ControllerRun::new).collect();
+    // `check_scenario` built them already (in `cablesim`'s runner): none fails here.
+    let controllers = scenario.controllers.iter().filter_map(|c| ControllerRun::new(c).ok()).collect();
     world.insert_resource(ScenarioRun {
         scenario,
         bodies,

@@ -9,7 +9,7 @@ use super::span::Location;
 use super::types::{Body, BodyKind, Cable, CableEnd, Joint, JointKind, Simulation};
 use super::validate::{fmt_num, list, Ctx, Res, Rule};
 use crate::crane::control::{DoubleLoopPid, IncrementalPid, InputShaper, NonlinearSchedule, PidGains, ShapedMove, ShaperKind, TrolleyController, Waypoints};
-use crate::crane::OverheadCrane;
+use crate::crane::{CraneError, OverheadCrane};
 
 /// The kinds of `[[controller]]`, by their `type` in the file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -85,28 +85,28 @@ pub struct Controller {
 }
 
 impl Controller {
-    /// The reference the controller follows.
-    pub fn reference(&self) -> Waypoints {
-        // Validated: the limits are positive and the times increasing.
-        Waypoints::new(&self.target, self.max_speed, self.max_acceleration).expect("validated controller target")
+    /// The reference the controller follows; an error if its limits or
+    /// waypoints are out of range (a [`Controller`] changed after
+    /// validation).
+    pub fn reference(&self) -> Result<Waypoints, CraneError> {
+        Waypoints::new(&self.target, self.max_speed, self.max_acceleration)
     }
 
-    /// A fresh controller (its state at t = 0).
-    pub fn build(&self) -> Box<dyn TrolleyController + Send + Sync> {
-        let motion = self.reference();
+    /// A fresh controller (its state at t = 0); an error naming the field
+    /// if a value is out of range (a [`Controller`] changed after
+    /// validation).
+    pub fn build(&self) -> Result<Box<dyn TrolleyController + Send + Sync>, CraneError> {
+        let motion = self.reference()?;
         let omega = 2.0 * std::f64::consts::PI * self.frequency;
-        // Validated: limits positive, gains finite, 0 ≤ ζ < 1, ω > 0.
-        let shaper = |kind| InputShaper::new(kind, omega, self.damping).expect("validated shaper");
-        let pid = || DoubleLoopPid::new(motion.clone(), self.position, self.sway, self.max_force).expect("validated PID");
-        match self.kind {
-            ControllerKind::Zv => Box::new(ShapedMove { motion, shaper: shaper(ShaperKind::Zv) }),
-            ControllerKind::Zvd => Box::new(ShapedMove { motion, shaper: shaper(ShaperKind::Zvd) }),
-            ControllerKind::PidDoubleLoop => Box::new(pid()),
-            ControllerKind::PidNonlinear => Box::new(pid().nonlinear(self.schedule)),
-            ControllerKind::PidIncremental => {
-                Box::new(IncrementalPid::new(motion.clone(), self.position, self.sway, self.sample_time, self.max_force).expect("validated PID"))
-            }
-        }
+        let shaper = |kind| InputShaper::new(kind, omega, self.damping);
+        let pid = || DoubleLoopPid::new(motion.clone(), self.position, self.sway, self.max_force);
+        Ok(match self.kind {
+            ControllerKind::Zv => Box::new(ShapedMove { motion: motion.clone(), shaper: shaper(ShaperKind::Zv)? }),
+            ControllerKind::Zvd => Box::new(ShapedMove { motion: motion.clone(), shaper: shaper(ShaperKind::Zvd)? }),
+            ControllerKind::PidDoubleLoop => Box::new(pid()?),
+            ControllerKind::PidNonlinear => Box::new(pid()?.nonlinear(self.schedule)),
+            ControllerKind::PidIncremental => Box::new(IncrementalPid::new(motion.clone(), self.position, self.sway, self.sample_time, self.max_force)?),
+        })
     }
 }
 

@@ -8,6 +8,7 @@
 use super::probe::{Probe, ProbeSource};
 use crate::coupling::set_velocity_drive;
 use crate::crane::control::{Reference, TrolleyCommand, TrolleyController, TrolleyMeasurement, Waypoints};
+use crate::crane::CraneError;
 use crate::scenario::{Controller, Quantity, Scenario};
 use glam::{DMat3, DVec3};
 use rapier3d::prelude as rp;
@@ -33,10 +34,18 @@ impl std::fmt::Debug for ControllerRun {
 }
 
 impl ControllerRun {
-    /// A fresh run of `spec`.
-    pub fn new(spec: &Controller) -> ControllerRun {
+    /// A fresh run of `spec`; an error if its values are out of range.
+    pub fn new(spec: &Controller) -> Result<ControllerRun, CraneError> {
         let command = if spec.kind.is_shaper() { TrolleyCommand::Speed(0.0) } else { TrolleyCommand::Force(0.0) };
-        ControllerRun { controller: spec.build(), reference: spec.reference(), spec: spec.clone(), samples: 0, command, sway: 0.0, error: 0.0 }
+        if !(spec.sample_time > 0.0 && spec.sample_time.is_finite()) {
+            return Err(CraneError::InvalidParameter {
+                model: "controller",
+                field: "sample_time",
+                value: spec.sample_time,
+                requirement: "positive and finite",
+            });
+        }
+        Ok(ControllerRun { controller: spec.build()?, reference: spec.reference()?, spec: spec.clone(), samples: 0, command, sway: 0.0, error: 0.0 })
     }
 
     /// At the start of a sub-step at `t` (s): when a sample is due

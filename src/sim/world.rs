@@ -576,7 +576,12 @@ impl World {
             if let Some(slide) = names[i].slide.as_mut() {
                 slide.1 = None;
             }
-            controllers.push((ControllerRun::new(c), i));
+            let run = ControllerRun::new(c).map_err(|e| SimError::Invalid {
+                file: file.clone(),
+                location: c.location,
+                message: format!("controller `{}`: {e}", c.name),
+            })?;
+            controllers.push((run, i));
         }
         Ok(World { scenario, core, names, rapier, motions: Motions(motions), time: 0.0, steps: 0, substeps, warnings, controllers })
     }
