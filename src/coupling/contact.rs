@@ -224,12 +224,17 @@ struct Obstacle<'a> {
     rotation: DMat3,
     exact: Option<BaseState>,
     body: Option<&'a rp::RigidBody>,
-    /// The step's start, s.
+    /// The time the obstacle is taken at, s (a contact pass's start).
     now: f64,
+    /// The coupling step's start, s (rapier's pose is the one then).
+    start: f64,
 }
 
 impl<'a> Obstacle<'a> {
-    fn new(handle: rp::ColliderHandle, collider: &'a rp::Collider, world: &Contacts<'_>, bodies: &'a rp::RigidBodySet, now: f64) -> Self {
+    /// The obstacle at `now` (s); rapier's pose is the one at `start`
+    /// (the coupling step's start), moved on with its body's velocities
+    /// when `now` is later (a contact pass inside the step).
+    fn new(handle: rp::ColliderHandle, collider: &'a rp::Collider, world: &Contacts<'_>, bodies: &'a rp::RigidBodySet, now: f64, start: f64) -> Self {
         let body = collider.parent().and_then(|p| bodies.get(p));
         let exact = collider.parent().and_then(|p| (world.motions)(p)).map(|m| m(now));
         let (origin, rotation) = match &exact {
@@ -239,16 +244,24 @@ impl<'a> Obstacle<'a> {
             }
             None => {
                 let pose = collider.position();
-                (pose.translation.as_dvec3(), DMat3::from_quat(pose.rotation.as_dquat().normalize()))
+                let (mut origin, mut rotation) = (pose.translation.as_dvec3(), DMat3::from_quat(pose.rotation.as_dquat().normalize()));
+                let dt = now - start;
+                if let (Some(rb), true) = (body, dt > 0.0) {
+                    let (com, w) = (rb.center_of_mass().as_dvec3(), rb.angvel().as_dvec3());
+                    let turn = DMat3::from_quat(glam::DQuat::from_scaled_axis(w * dt));
+                    origin = com + turn * (origin - com) + rb.linvel().as_dvec3() * dt;
+                    rotation = turn * rotation;
+                }
+                (origin, rotation)
             }
         };
-        Obstacle { handle, collider, origin, rotation, exact, body, now }
+        Obstacle { handle, collider, origin, rotation, exact, body, now, start }
     }
 
     /// Every collider a rope or a carried body may touch this step, at
     /// `now` (s): not a sensor, not on a dynamic body (see
     /// [`add_contacts`]) and not on a body in `exclude`.
-    fn all(world: &Contacts<'a>, bodies: &'a rp::RigidBodySet, exclude: &[rp::RigidBodyHandle], now: f64) -> Vec<Obstacle<'a>> {
+    fn all(world: &Contacts<'a>, bodies: &'a rp::RigidBodySet, exclude: &[rp::RigidBodyHandle], now: f64, start: f64) -> Vec<Obstacle<'a>> {
         world
             .colliders
             .iter()
@@ -262,13 +275,34 @@ impl<'a> Obstacle<'a> {
                 let dynamic = c.parent().and_then(|p| bodies.get(p)).is_some_and(|rb| rb.is_dynamic());
                 !c.is_sensor() && !dynamic && !c.parent().is_some_and(|p| exclude.contains(&p))
             })
-            .map(|(h, c)| Obstacle::new(h, c, world, bodies, now))
+            .map(|(h, c)| Obstacle::new(h, c, world, bodies, now, start))
             .collect()
     }
 
-    /// The collider's bounding box, world, m.
+    /// A bound on the speed of the collider's surface over the step, m/s
+    /// (its body's speed plus its turn times the farthest corner of its
+    /// bounding box from the turn's centre), so that the speculative reach
+    /// covers what the obstacle moves too: 0 for a fixed one.
+    fn speed(&self) -> f64 {
+        let (lo, hi) = self.aabb();
+        let corner = |c: DVec3| (c - lo).abs().max((c - hi).abs()).length();
+        match (&self.exact, self.body) {
+            (Some(b), _) => b.velocity.length() + b.angular_velocity.length() * corner(b.position),
+            (None, Some(rb)) => rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * corner(rb.center_of_mass().as_dvec3()),
+            (None, None) => 0.0,
+        }
+    }
+
+    /// The collider's bounding box, world, m: rapier's at the step's
+    /// start, or, for a later contact pass, the shape's at the obstacle's
+    /// pose then.
     fn aabb(&self) -> (DVec3, DVec3) {
-        let aabb = self.collider.compute_aabb();
+        let aabb = if self.now > self.start {
+            let pose = rp::Pose::from_parts(self.origin.as_vec3(), glam::DQuat::from_mat3(&self.rotation).normalize().as_quat());
+            self.collider.shape().compute_aabb(&pose)
+        } else {
+            self.collider.compute_aabb()
+        };
         (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3())
     }
 
@@ -339,6 +373,7 @@ fn nearest(shape: &dyn rp::Shape, p: DVec3) -> Option<(DVec3, DVec3, f64)> {
 /// than both its nodes (a rope over an edge). `h` (s) sets the margin:
 /// `2 h |v| + h² |g|` plus the rope's radius beyond the rope's surface at
 /// the step's start (`v` the faster of the element's nodes).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn add_contacts(
     cable: &mut Cable,
     contact: &CableContact,
@@ -347,10 +382,12 @@ pub(crate) fn add_contacts(
     bodies: &rp::RigidBodySet,
     exclude: &[rp::RigidBodyHandle],
     h: f64,
-) {
+    start: f64,
+) -> f64 {
+    let mut approach = 0.0f64;
     let radius = 0.5 * cable.model.diameter;
     let gravity = cable.model.chain.gravity.length();
-    let obstacles = Obstacle::all(world, bodies, exclude, cable.time());
+    let obstacles = Obstacle::all(world, bodies, exclude, cable.time(), start);
     for rope in 0..cable.ropes() {
         let Some(view) = cable.rope(rope) else {
             continue;
@@ -379,6 +416,9 @@ pub(crate) fn add_contacts(
             let (cmin, cmax) = obstacle.aabb();
             let co = obstacle.collider;
             let mu = combine(contact.friction, co.friction() as f64, rp::CoefficientCombineRule::Average, co.friction_combine_rule());
+            // What the obstacle itself may move in the step.
+            let own_reach = 2.0 * h * obstacle.speed();
+            let reach: Vec<f64> = reach.iter().map(|r| r + own_reach).collect();
             let site = |site: usize| Site::Rope { rope, site, obstacle: obstacle.handle };
             let mut add = |memory: &mut FrictionMemory, at: usize, s: f64, hit, fraction| {
                 let c = memory.note(site(at), obstacle.contact(hit, radius, contact.law), mu, fraction, [obstacle.collider.parent(), None]);
@@ -396,7 +436,17 @@ pub(crate) fn add_contacts(
                 if !touches {
                     continue;
                 }
-                if let Some(hit) = obstacle.nearest(nodes[k]).filter(|hit| hit.2 - radius <= reach_k) {
+                // An obstacle moving near the rope drags it: its own speed
+                // counts too (a node it carries along closes at 0).
+                approach = approach.max(obstacle.speed());
+                let Some(hit) = obstacle.nearest(nodes[k]) else {
+                    continue;
+                };
+                // How fast the node and the obstacle close, within reach or
+                // not (the step's contact passes follow it).
+                let (q, normal) = (obstacle.origin + obstacle.rotation * hit.0, obstacle.rotation * hit.1);
+                approach = approach.max(-(velocities[k] - obstacle.surface_velocity(q)).dot(normal));
+                if hit.2 - radius <= reach_k {
                     add(memory, 2 * k, k as f64 * element_length, hit, 0.0);
                 }
             }
@@ -437,6 +487,7 @@ pub(crate) fn add_contacts(
             debug_assert!(added, "rope {rope} exists");
         }
     }
+    approach
 }
 
 /// The contact law of a carried body's touch points: steel on steel,
@@ -489,6 +540,7 @@ fn touch_points(shape: &dyn rp::Shape) -> Vec<(DVec3, f64)> {
 /// [`SphereContact`] on the body's link, so a payload set down on the
 /// ground rests on it inside the implicit solve instead of through
 /// rapier's impulse one step late. Returns whether any was added.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn add_body_contacts(
     cable: &mut Cable,
     carried: &[CarriedLink],
@@ -497,9 +549,11 @@ pub(crate) fn add_body_contacts(
     bodies: &rp::RigidBodySet,
     exclude: &[rp::RigidBodyHandle],
     h: f64,
-) -> bool {
+    start: f64,
+) -> (bool, f64) {
+    let mut approach = 0.0f64;
     let gravity = cable.model.chain.gravity.length();
-    let obstacles = Obstacle::all(world, bodies, exclude, cable.time());
+    let obstacles = Obstacle::all(world, bodies, exclude, cable.time(), start);
     let mut hits: Vec<AttachedForce> = Vec::new();
     for c in carried {
         let Some(rb) = bodies.get(c.body) else {
@@ -524,17 +578,23 @@ pub(crate) fn add_body_contacts(
                 let (cmin, cmax) = obstacle.aabb();
                 let co = obstacle.collider;
                 let mu = combine(collider.friction() as f64, co.friction() as f64, collider.friction_combine_rule(), co.friction_combine_rule());
+                let own_reach = 2.0 * h * obstacle.speed();
                 for (point, (q, radius)) in points.iter().enumerate() {
                     let world_point = p + r * *q;
                     let speed = (v + w.cross(r * *q)).length();
-                    let reach = 2.0 * h * speed + h * h * gravity + 0.01;
+                    let reach = 2.0 * h * speed + h * h * gravity + 0.01 + own_reach;
                     let pad = DVec3::splat(radius + reach);
                     if (world_point - pad).cmpgt(cmax).any() || (world_point + pad).cmplt(cmin).any() {
                         continue;
                     }
-                    let Some(hit) = obstacle.nearest(world_point).filter(|hit| hit.2 - radius <= reach) else {
+                    let Some(hit) = obstacle.nearest(world_point) else {
                         continue;
                     };
+                    let (sq, sn) = (obstacle.origin + obstacle.rotation * hit.0, obstacle.rotation * hit.1);
+                    approach = approach.max(-(v + w.cross(r * *q) - obstacle.surface_velocity(sq)).dot(sn));
+                    if hit.2 - radius > reach {
+                        continue;
+                    }
                     let site = Site::Body { collider: *own, point, obstacle: obstacle.handle };
                     let element = memory.note(site, obstacle.contact(hit, *radius, law), mu, 0.0, [co.parent(), Some(c.body)]);
                     hits.push(AttachedForce { link: c.place.link, local_point: c.place.origin + c.place.rotation * *q, element: Arc::new(element) });
@@ -544,7 +604,7 @@ pub(crate) fn add_body_contacts(
     }
     let any = !hits.is_empty();
     cable.model.chain.forces_mut().extend(hits);
-    any
+    (any, approach)
 }
 
 /// Drops the force elements past `keep` (the last step's contacts).

@@ -1102,47 +1102,75 @@ pub fn step_cables(
         }
     }
     // Contacts of the rope elements with rapier's colliders, frozen for the
-    // step (the cable's own bodies excluded).
-    for cc in cables.iter_mut().filter(|c| !c.failed) {
-        contact::clear(&mut cc.cable, cc.fixed_forces);
-        cc.friction.discard_step();
-        cc.body_contacts = false;
-        if let Some(settings) = cc.contact {
-            // The cable's own bodies, and a trolley's rail (rapier does not
-            // collide jointed bodies either).
-            let rails = cc.all_roles().filter_map(|(_, r)| match r {
-                Role::Trolley { joint, .. } => joints.get(*joint).map(|j| [j.body1(), j.body2()]),
-                _ => None,
-            });
-            let own: Vec<rp::RigidBodyHandle> = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).chain(rails.flatten()).collect();
-            contact::add_contacts(&mut cc.cable, &settings, &mut cc.friction, &contacts, bodies, &own, h);
-            cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, &own, h);
-            cc.friction.attach(&mut cc.cable, cc.fixed_forces);
+    // step (the cable's own bodies excluded), and how many contact passes
+    // each cable's step needs (see `contact_passes`).
+    let mut owns: Vec<Vec<rp::RigidBodyHandle>> = Vec::with_capacity(cables.len());
+    let mut passes: Vec<u32> = Vec::with_capacity(cables.len());
+    for cc in cables.iter_mut() {
+        let mut own = Vec::new();
+        let mut count = 1;
+        if !cc.failed {
+            contact::clear(&mut cc.cable, cc.fixed_forces);
+            cc.friction.discard_step();
+            cc.body_contacts = false;
+            if let Some(settings) = cc.contact {
+                // The cable's own bodies, and a trolley's rail (rapier does not
+                // collide jointed bodies either).
+                let rails = cc.all_roles().filter_map(|(_, r)| match r {
+                    Role::Trolley { joint, .. } => joints.get(*joint).map(|j| [j.body1(), j.body2()]),
+                    _ => None,
+                });
+                own = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).chain(rails.flatten()).collect();
+                let start = cc.cable.time();
+                let ropes = contact::add_contacts(&mut cc.cable, &settings, &mut cc.friction, &contacts, bodies, &own, h, start);
+                let (any, carried) = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, &own, h, start);
+                cc.body_contacts = any;
+                cc.friction.attach(&mut cc.cable, cc.fixed_forces);
+                count = contact_passes(ropes.max(carried), h);
+            }
         }
+        owns.push(own);
+        passes.push(count);
     }
     // The cables' own solves: independent of each other and of rapier (every
     // body a cable reads was sampled or handed over above), so they may run
     // at once; the results do not depend on the order.
     let advance = |cc: &mut CoupledCable| {
-        if cc.failed {
-            return;
-        }
-        let t = cc.cable.time();
-        if cc.cable.steps == 0 {
-            if let Err(e) = cc.cable.recompute_acceleration() {
-                cc.advance_failure = Some((t, e));
-                return;
-            }
-        }
-        let hs = h / n as f64;
-        for k in 0..n {
-            if let Err(e) = cc.cable.step(hs) {
-                cc.advance_failure = Some((t + k as f64 * hs, e));
-                return;
-            }
+        if !cc.failed {
+            advance_by(cc, h, n);
         }
     };
-    each.for_each(cables, &advance);
+    if passes.iter().all(|&p| p == 1) {
+        each.for_each(cables, &advance);
+    } else {
+        // A cable whose contacts close fast finds them again at each of its
+        // passes (cables one by one: the same bits as at once).
+        for ((cc, &count), own) in cables.iter_mut().zip(&passes).zip(&owns) {
+            if count == 1 {
+                advance(cc);
+                continue;
+            }
+            let (start, hp) = (cc.cable.time(), h / count as f64);
+            let settings = cc.contact.expect("passes > 1 only with contacts");
+            for k in 0..count {
+                // Contacts found again at the pass's start, with the pass's
+                // speculative reach (the first pass too).
+                contact::clear(&mut cc.cable, cc.fixed_forces);
+                cc.friction.discard_step();
+                contact::add_contacts(&mut cc.cable, &settings, &mut cc.friction, &contacts, bodies, own, hp, start);
+                cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, own, hp, start).0;
+                cc.friction.attach(&mut cc.cable, cc.fixed_forces);
+                if !advance_by(cc, hp, n) {
+                    break;
+                }
+                if k + 1 < count {
+                    let t = cc.cable.time();
+                    let points = cc.cable.model.chain.force_element_points().skip(cc.fixed_forces);
+                    cc.friction.remember(t, points);
+                }
+            }
+        }
+    }
     for (ci, cc) in cables.iter_mut().enumerate() {
         if let Some((time, e)) = cc.advance_failure.take() {
             cc.failed = true;
@@ -1184,6 +1212,54 @@ pub fn step_cables(
         }
     }
     failures
+}
+
+/// Steps `cc`'s cable by `h` (s) in `n` equal sub-steps (recomputing its
+/// acceleration before its very first step); on a failure, records it
+/// with the failing sub-step's time and returns `false`.
+fn advance_by(cc: &mut CoupledCable, h: f64, n: u32) -> bool {
+    let t = cc.cable.time();
+    if cc.cable.steps == 0 {
+        if let Err(e) = cc.cable.recompute_acceleration() {
+            cc.advance_failure = Some((t, e));
+            return false;
+        }
+    }
+    let hs = h / n as f64;
+    for k in 0..n {
+        if let Err(e) = cc.cable.step(hs) {
+            cc.advance_failure = Some((t + k as f64 * hs, e));
+            return false;
+        }
+    }
+    true
+}
+
+/// Approach (m) that one contact pass may close (or an obstacle near the
+/// rope may move): contacts are frozen planes found at a pass's start,
+/// and a rope struck by an obstacle that closes much more than this
+/// within a pass fails its solve (measured on a taut steel rope struck at
+/// 4 m/s: a cube runs at 1.7 cm per pass and fails at 3.3 cm; a ball,
+/// which the rope wraps, fails at 9.5 mm and runs at 4.8 mm;
+/// docs/architecture.md, "Contact").
+pub const APPROACH_PER_PASS: f64 = 0.005;
+
+/// Most contact passes in one step.
+pub const MAX_CONTACT_PASSES: u32 = 64;
+
+/// How many contact passes a step of `h` (s) takes when its contacts
+/// close at up to `approach` (m/s; or an obstacle near the rope moves that
+/// fast): enough that each closes at most [`APPROACH_PER_PASS`], at most
+/// [`MAX_CONTACT_PASSES`], at least 1. The cable's step then finds its
+/// contacts again at the start of each pass (the obstacles at their exact
+/// or extrapolated pose then) and steps the pass.
+pub fn contact_passes(approach: f64, h: f64) -> u32 {
+    let need = (approach * h / APPROACH_PER_PASS).ceil();
+    if need.is_finite() && need > 1.0 {
+        (need as u32).min(MAX_CONTACT_PASSES)
+    } else {
+        1
+    }
 }
 
 /// Phase 2, after rapier's step: the velocity change rapier's contacts
