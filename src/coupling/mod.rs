@@ -1146,12 +1146,12 @@ pub fn step_cables(
         // A cable whose contacts close fast finds them again at each of its
         // passes (cables one by one: the same bits as at once).
         for ((cc, &count), own) in cables.iter_mut().zip(&passes).zip(&owns) {
-            if count == 1 {
+            // (More than one pass only with contacts on.)
+            let Some(settings) = cc.contact.filter(|_| count > 1) else {
                 advance(cc);
                 continue;
-            }
+            };
             let (start, hp) = (cc.cable.time(), h / count as f64);
-            let settings = cc.contact.expect("passes > 1 only with contacts");
             for k in 0..count {
                 // Contacts found again at the pass's start, with the pass's
                 // speculative reach (the first pass too).
