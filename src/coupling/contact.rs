@@ -226,8 +226,10 @@ struct Obstacle<'a> {
     body: Option<&'a rp::RigidBody>,
     /// The time the obstacle is taken at, s (a contact pass's start).
     now: f64,
-    /// The coupling step's start, s (rapier's pose is the one then).
-    start: f64,
+    /// Its bounding box then, world, m ([`Obstacle::aabb`]).
+    bounds: (DVec3, DVec3),
+    /// Its surface's speed bound, m/s ([`Obstacle::speed`]).
+    speed: f64,
 }
 
 impl<'a> Obstacle<'a> {
@@ -255,7 +257,20 @@ impl<'a> Obstacle<'a> {
                 (origin, rotation)
             }
         };
-        Obstacle { handle, collider, origin, rotation, exact, body, now, start }
+        let aabb = if now > start {
+            let pose = rp::Pose::from_parts(origin.as_vec3(), glam::DQuat::from_mat3(&rotation).normalize().as_quat());
+            collider.shape().compute_aabb(&pose)
+        } else {
+            collider.compute_aabb()
+        };
+        let (lo, hi) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
+        let corner = |c: DVec3| (c - lo).abs().max((c - hi).abs()).length();
+        let speed = match (&exact, body) {
+            (Some(b), _) => b.velocity.length() + b.angular_velocity.length() * corner(b.position),
+            (None, Some(rb)) => rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * corner(rb.center_of_mass().as_dvec3()),
+            (None, None) => 0.0,
+        };
+        Obstacle { handle, collider, origin, rotation, exact, body, now, bounds: (lo, hi), speed }
     }
 
     /// Every collider a rope or a carried body may touch this step, at
@@ -284,26 +299,14 @@ impl<'a> Obstacle<'a> {
     /// bounding box from the turn's centre), so that the speculative reach
     /// covers what the obstacle moves too: 0 for a fixed one.
     fn speed(&self) -> f64 {
-        let (lo, hi) = self.aabb();
-        let corner = |c: DVec3| (c - lo).abs().max((c - hi).abs()).length();
-        match (&self.exact, self.body) {
-            (Some(b), _) => b.velocity.length() + b.angular_velocity.length() * corner(b.position),
-            (None, Some(rb)) => rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * corner(rb.center_of_mass().as_dvec3()),
-            (None, None) => 0.0,
-        }
+        self.speed
     }
 
     /// The collider's bounding box, world, m: rapier's at the step's
     /// start, or, for a later contact pass, the shape's at the obstacle's
     /// pose then.
     fn aabb(&self) -> (DVec3, DVec3) {
-        let aabb = if self.now > self.start {
-            let pose = rp::Pose::from_parts(self.origin.as_vec3(), glam::DQuat::from_mat3(&self.rotation).normalize().as_quat());
-            self.collider.shape().compute_aabb(&pose)
-        } else {
-            self.collider.compute_aabb()
-        };
-        (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3())
+        self.bounds
     }
 
     /// The nearest surface point to the world point `p` (m), its outward
@@ -418,7 +421,7 @@ pub(crate) fn add_contacts(
             let mu = combine(contact.friction, co.friction() as f64, rp::CoefficientCombineRule::Average, co.friction_combine_rule());
             // What the obstacle itself may move in the step.
             let own_reach = 2.0 * h * obstacle.speed();
-            let reach: Vec<f64> = reach.iter().map(|r| r + own_reach).collect();
+            let reach = |i: usize| reach[i] + own_reach;
             let site = |site: usize| Site::Rope { rope, site, obstacle: obstacle.handle };
             let mut add = |memory: &mut FrictionMemory, at: usize, s: f64, hit, fraction| {
                 let c = memory.note(site(at), obstacle.contact(hit, radius, contact.law), mu, fraction, [obstacle.collider.parent(), None]);
@@ -426,12 +429,12 @@ pub(crate) fn add_contacts(
             };
             let near = |i: usize| {
                 let (a, b) = (nodes[i], nodes[i + 1]);
-                let pad = DVec3::splat(radius + reach[i]);
+                let pad = DVec3::splat(radius + reach(i));
                 !((a.min(b) - pad).cmpgt(cmax).any() || (a.max(b) + pad).cmplt(cmin).any())
             };
             // Nodes.
             for k in (0..=n).filter(|&k| !((k == 0 && held_first) || (k == n && held_last))) {
-                let reach_k = reach[k.min(n.saturating_sub(1))].max(if k > 0 { reach[k - 1] } else { 0.0 });
+                let reach_k = reach(k.min(n.saturating_sub(1))).max(if k > 0 { reach(k - 1) } else { 0.0 });
                 let touches = (k < n && near(k)) || (k > 0 && near(k - 1));
                 if !touches {
                     continue;
@@ -474,7 +477,7 @@ pub(crate) fn add_contacts(
                 }
                 let f = 0.5 * (lo + hi);
                 let d = dist(f);
-                if f > 0.02 && f < 0.98 && d < ends - 1e-3 * radius && d - radius <= reach[i] {
+                if f > 0.02 && f < 0.98 && d < ends - 1e-3 * radius && d - radius <= reach(i) {
                     let f = memory.fraction(site(2 * i + 1), f);
                     if let Some(hit) = obstacle.nearest_local(a.lerp(b, f)) {
                         add(memory, 2 * i + 1, (i as f64 + f) * element_length, hit, f);
