@@ -9,17 +9,20 @@
 
 use bevy_rapier_cable::coupling::{contact_passes, APPROACH_PER_PASS, MAX_CONTACT_PASSES};
 use bevy_rapier_cable::scenario;
-use bevy_rapier_cable::sim::World;
+
+#[path = "common/scenario_run.rs"]
+mod scenario_run;
+use scenario_run::run_scenario;
 
 /// A 10 m, 16 mm steel rope across 9.99 m at 5 m (static start, sagging
 /// 0.2 m), struck at mid-span by `shape` (a kinematic body) moving down
 /// at 4 m/s from y = 5.2 m: (t, obstacle y, mid-span y, tension at the
-/// start) every frame for 0.19 s.
+/// start) every frame for 0.2 s.
 fn strike(shape: &str) -> Vec<(f64, f64, f64, f64)> {
     let source = format!(
         r#"
 [simulation]
-duration = 0.19
+duration = 0.2
 dt = 0.016666666666666666
 statics = true
 
@@ -62,15 +65,7 @@ s = 0.0
 "#
     );
     let sc = scenario::parse(&source, "strike.toml").unwrap_or_else(|e| panic!("{e}"));
-    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
-    let (mut out, mut rows) = (Vec::new(), Vec::new());
-    while world.time < 0.19 - 1e-9 {
-        world.step().unwrap_or_else(|e| panic!("{shape}: {e}"));
-        out.clear();
-        world.sample(&mut out);
-        rows.push((world.time, out[0], out[1], out[2]));
-    }
-    rows
+    run_scenario(sc).1.iter().map(|r| (r[0], r[1], r[2], r[3])).collect()
 }
 
 /// The cube (0.4 m, flat face down) and the ball (r 0.2 m) each run the

@@ -6,6 +6,10 @@ use bevy_rapier_cable::crane::control::*;
 use bevy_rapier_cable::crane::OverheadCrane;
 use std::f64::consts::PI;
 
+#[path = "common/tower_slew.rs"]
+mod tower_slew;
+use tower_slew::reduced_slew_swing;
+
 const G: f64 = 9.81;
 /// Trolley 500 kg, payload 1 t.
 const TROLLEY: f64 = 500.0;
@@ -259,8 +263,6 @@ fn bad_controller_settings_are_refused_by_name() {
 /// shaped command (within 5 %), well below the unshaped one.
 #[test]
 fn shaped_slew_of_a_tower_crane_leaves_the_closed_form_swing() {
-    use bevy_rapier_cable::crane::TowerCrane;
-    use bevy_rapier_cable::integrate::{Integrator, State};
     let (x, l) = (20.0, 15.0);
     let slew = Move { t0: 0.0, start: 0.0, target: PI / 2.0, max_speed: 0.1, max_acceleration: 0.02 };
     let omega = (G / l).sqrt();
@@ -292,22 +294,7 @@ fn shaped_slew_of_a_tower_crane_leaves_the_closed_form_swing() {
         let shaped = ShapedMove { motion: slew, shaper: shaper.clone() };
         let end = slew.duration() + shaper.duration();
         let expected = closed(&|t| shaped.speed(t), end);
-        let mut sys = TowerCrane::new(2e5, 800.0, 2000.0, l).unwrap().system();
-        let mut state = State::new(&mut sys, 0.0, vec![0.0, x, 0.0, 0.0], vec![0.0; 4]).unwrap();
-        let mut integrator = Integrator::default();
-        let mut swing = 0.0f64;
-        while state.t < end + 20.0 {
-            // A stiff slew speed loop; the trolley held at its radius.
-            sys.model.slew_torque = 1e9 * (shaped.speed(state.t) - state.v[0]);
-            sys.model.trolley_force = -1e7 * (state.q[1] - x) - 1e6 * state.v[1];
-            integrator.step(&mut sys, &mut state, 1e-3).unwrap();
-            if state.t > end {
-                let p = sys.points(&state.q, &state.v);
-                let (dx, dz) = (p[1].0[0] - p[0].0[0], p[1].0[2] - p[0].0[2]);
-                swing = swing.max(dx.hypot(dz) / l);
-            }
-        }
-        (swing, expected)
+        (reduced_slew_swing(&shaped, end, x, l), expected)
     };
     let (u0, c0) = run(InputShaper { impulses: vec![(0.0, 1.0)] });
     let (u1, c1) = run(InputShaper::new(ShaperKind::Zv, omega, 0.0).unwrap());

@@ -11,6 +11,13 @@ use bevy_rapier_cable::crane::OverheadCrane;
 use bevy_rapier_cable::scenario;
 use bevy_rapier_cable::sim::World;
 
+#[path = "common/scenario_run.rs"]
+mod scenario_run;
+use scenario_run::run_scenario;
+#[path = "common/tower_slew.rs"]
+mod tower_slew;
+use tower_slew::reduced_slew_swing;
+
 const ROPE: f64 = 10.0;
 const RADIUS: f64 = 0.3;
 /// Linear density of the 20 mm 6×36 IWRC rope, kg/m (the material's).
@@ -99,17 +106,9 @@ quantity = "position"
 "#
     );
     let sc = scenario::parse(&source, "full_rope.toml").unwrap_or_else(|e| panic!("{e}"));
-    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
-    let mut out = Vec::new();
-    let mut rows = Vec::new();
-    while world.time < duration - 1e-9 {
-        world.step().unwrap_or_else(|e| panic!("{e}"));
-        out.clear();
-        world.sample(&mut out);
-        let (tx, ty, px, py) = (out[0], out[1], out[3], out[4]);
-        rows.push((world.time, tx, (px - tx).atan2(ty - py)));
-    }
-    rows
+    let (_, rows) = run_scenario(sc);
+    // [t, trolley xyz, payload xyz]
+    rows.iter().map(|r| (r[0], r[1], (r[4] - r[1]).atan2(r[2] - r[5]))).collect()
 }
 
 /// The reduced model with the rope's mass lumped as a rigid compound
@@ -191,8 +190,6 @@ fn full_rope_crane_follows_the_reduced_model() {
 /// ball's inertia are not in the reduced model.
 #[test]
 fn full_rope_tower_crane_slew_follows_the_reduced_model() {
-    use bevy_rapier_cable::crane::TowerCrane;
-    use bevy_rapier_cable::integrate::{Integrator, State};
     use std::f64::consts::PI;
     let (x, l) = (20.0, 15.0);
     // From rest at 1 s: the rope starts from its static equilibrium (a jib
@@ -200,22 +197,6 @@ fn full_rope_tower_crane_slew_follows_the_reduced_model() {
     // turn about the rope against the frame's angular acceleration).
     let slew = Move { t0: 1.0, start: 0.0, target: PI / 2.0, max_speed: 0.1, max_acceleration: 0.02 };
     let omega = (9.81f64 / l).sqrt();
-    let reduced = |shaped: &ShapedMove, end: f64| -> f64 {
-        let mut sys = TowerCrane::new(2e5, 800.0, 2000.0, l).unwrap().system();
-        let mut state = State::new(&mut sys, 0.0, vec![0.0, x, 0.0, 0.0], vec![0.0; 4]).unwrap();
-        let mut integrator = Integrator::default();
-        let mut swing = 0.0f64;
-        while state.t < end + 20.0 {
-            sys.model.slew_torque = 1e9 * (shaped.speed(state.t) - state.v[0]);
-            sys.model.trolley_force = -1e7 * (state.q[1] - x) - 1e6 * state.v[1];
-            integrator.step(&mut sys, &mut state, 1e-3).unwrap();
-            if state.t > end {
-                let p = sys.points(&state.q, &state.v);
-                swing = swing.max((p[1].0[0] - p[0].0[0]).hypot(p[1].0[2] - p[0].0[2]) / l);
-            }
-        }
-        swing
-    };
     let full = |shaped: &ShapedMove, end: f64| -> f64 {
         let duration = end + 20.0;
         // The slew rate table in deg/s (the shaped speed is piecewise linear).
@@ -285,7 +266,7 @@ quantity = "position"
     for (label, shaper) in [("unshaped", InputShaper { impulses: vec![(0.0, 1.0)] }), ("ZV", InputShaper::new(ShaperKind::Zv, omega, 0.0).unwrap())] {
         let end = slew.t0 + slew.duration() + shaper.duration();
         let shaped = ShapedMove { motion: slew, shaper };
-        let (f, r) = (full(&shaped, end), reduced(&shaped, end));
+        let (f, r) = (full(&shaped, end), reduced_slew_swing(&shaped, end, x, l));
         println!("tower slew 90°, {label}: residual swing full rope {:.4}° vs reduced {:.4}° ({:+.2e})", f.to_degrees(), r.to_degrees(), f / r - 1.0);
         assert!((f / r - 1.0).abs() < 0.015, "{label}: full {f} vs reduced {r}");
     }
@@ -375,15 +356,15 @@ quantity = "position"
 "#
     );
     let sc = scenario::parse(&source, "forestry.toml").unwrap_or_else(|e| panic!("{e}"));
-    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
-    let (mut out, mut full) = (Vec::new(), Vec::new());
-    while world.time < duration - 1e-9 {
-        world.step().unwrap_or_else(|e| panic!("{e}"));
-        out.clear();
-        world.sample(&mut out);
-        let (dx, dy, dz) = (out[3] - out[0], out[1] - out[4], out[5] - out[2]);
-        full.push((world.time, dx.atan2(dy), dz.atan2(dy)));
-    }
+    // [t, trolley xyz, bundle xyz]
+    let full: Vec<(f64, f64, f64)> = run_scenario(sc)
+        .1
+        .iter()
+        .map(|r| {
+            let (dx, dy, dz) = (r[4] - r[1], r[2] - r[5], r[6] - r[3]);
+            (r[0], dx.atan2(dy), dz.atan2(dy))
+        })
+        .collect();
     // The rope's mass lumped half at each end (the trolley is light: the
     // rope's 6 kg are 2 % of it, which moves the in-plane period by 0.4 %).
     let half_rope = 0.5 * 5.8 * bevy_rapier_cable::cable::RopeMaterial::steel_6x36_iwrc(0.016).section().linear_density;

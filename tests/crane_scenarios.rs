@@ -9,6 +9,10 @@ use bevy_rapier_cable::crane::control::{OverheadCraneLoop, Reference, TrolleyCon
 use bevy_rapier_cable::crane::OverheadCrane;
 use bevy_rapier_cable::scenario::{self, Controller};
 use bevy_rapier_cable::sim::World;
+
+#[path = "common/scenario_run.rs"]
+mod scenario_run;
+use scenario_run::run_scenario;
 use std::f64::consts::PI;
 
 const SHIPPED: [(&str, &str); 5] = [
@@ -66,16 +70,9 @@ fn controller_table(name: &str, extra: &str) -> String {
 /// (t, trolley x, sway θ measured independently of the controller: the
 /// trolley-to-payload-centre line, rad, drive force N) every frame.
 fn run_full(text: &str) -> Vec<(f64, f64, f64, f64)> {
-    let sc = scenario::parse(text, "crane.toml").unwrap_or_else(|e| panic!("{e}"));
-    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
-    let (mut out, mut rows) = (Vec::new(), Vec::new());
-    while world.time < world.scenario.simulation.duration - 1e-9 {
-        world.step().unwrap_or_else(|e| panic!("{e}"));
-        out.clear();
-        world.sample(&mut out);
-        rows.push((world.time, out[0], (out[3] - out[0]).atan2(out[1] - out[4]), out[6]));
-    }
-    rows
+    let (_, rows) = run_scenario(scenario::parse(text, "crane.toml").unwrap_or_else(|e| panic!("{e}")));
+    // [t, trolley xyz, payload xyz, rail force]
+    rows.iter().map(|r| (r[0], r[1], (r[4] - r[1]).atan2(r[2] - r[5]), r[7])).collect()
 }
 
 /// The reduced model (rope mass lumped, `OverheadCrane::with_rope_mass`)
@@ -273,15 +270,7 @@ fn bad_controllers_are_refused_by_name() {
 }
 
 fn scenario_rows(text: &str) -> Vec<Vec<f64>> {
-    let mut world = World::new(scenario::parse(text, "crane.toml").unwrap()).unwrap();
-    let mut rows = Vec::new();
-    while world.time < world.scenario.simulation.duration - 1e-9 {
-        world.step().unwrap();
-        let mut out = Vec::new();
-        world.sample(&mut out);
-        rows.push(out);
-    }
-    rows
+    run_scenario(scenario::parse(text, "crane.toml").unwrap()).1
 }
 
 /// The full rope crane of a shipped scenario spawned into a Bevy app with
