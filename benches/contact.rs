@@ -59,7 +59,80 @@ path = [[{x0}, 0.011, 0.0], [{x1}, 0.011, 0.0]]
     w
 }
 
+/// A rope lying on the ground whose last part comes back across its own
+/// first straight `crossings` times (a zig-zag 0.1 m elements, moulded
+/// stress-free, let go 1 mm above touching), with `n` elements in all:
+/// `crossings` pair contacts at rest (rope on itself), settled for 1 s.
+fn crossing_world(n: usize, crossings: usize) -> World {
+    let length = 0.1 * n as f64;
+    // The zig-zag: legs from z = +0.5 to z = −0.5 and back, each crossing
+    // the straight at z = 0; the straight takes the rest of the length.
+    let leg = |dx: f64| (dx * dx + 1.0f64).sqrt();
+    let span = 4.0f64.max(0.4 * crossings as f64);
+    let dx = span / crossings.max(1) as f64;
+    let zig = if crossings > 0 { 0.5 + crossings as f64 * leg(dx) } else { 0.0 };
+    let straight = length - zig - 0.05;
+    let mut path = vec![[-straight + span * 0.5, 0.011, 0.0], [span * 0.5, 0.011, 0.0]];
+    if crossings > 0 {
+        path.push([span * 0.5, 0.032, 0.5]);
+        for k in 0..crossings {
+            let z = if k % 2 == 0 { -0.5 } else { 0.5 };
+            path.push([span * 0.5 - (k + 1) as f64 * dx, 0.032, z]);
+        }
+    }
+    let points: Vec<String> = path.iter().map(|p| format!("[{}, {}, {}]", p[0], p[1], p[2])).collect();
+    let laid: f64 = path.windows(2).map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2) + (w[1][2] - w[0][2]).powi(2)).sqrt()).sum();
+    let src = format!(
+        r#"
+[simulation]
+duration = 1000.0
+dt = 0.016666666666666666
+
+[[body]]
+name = "ground"
+type = "fixed"
+shape = "cuboid"
+half_extents = [{half}, 0.5, 5.0]
+position = [0.0, -0.5, 0.0]
+friction = 0.0
+
+[[cable]]
+name = "rope"
+length = {laid}
+segments = {n}
+diameter = 0.020
+material = "steel_wire_rope_6x36_iwrc"
+damping = 0.05
+stress_free = true
+friction = 0.0
+path = [{points}]
+"#,
+        half = length + 10.0,
+        points = points.join(", "),
+    );
+    let sc = scenario::parse(&src, "crossing_bench.toml").unwrap();
+    let mut w = World::new(sc).unwrap();
+    for _ in 0..60 {
+        w.step().unwrap();
+    }
+    // The scene is what it says: a pair contact at each crossing (a
+    // crossing may hold two, at an element's end).
+    let pairs = w.cable("rope").unwrap().model.chain.pairs().len();
+    eprintln!("rope on itself, N = {n}, {crossings} crossings: {pairs} pair contacts");
+    assert!(pairs >= crossings && pairs <= 3 * crossings, "{pairs} pair contacts for {crossings} crossings");
+    w
+}
+
 fn contact(c: &mut Criterion<cpu_time::ThreadCpuTime>) {
+    let mut g = c.benchmark_group("contact/rope_on_itself_step");
+    for n in [200usize, 1000] {
+        for crossings in [0usize, 1, 10] {
+            let mut w = crossing_world(n, crossings);
+            let id = BenchmarkId::new(format!("crossings_{crossings}"), n);
+            g.bench_function(id, |b| b.iter(|| w.step().unwrap()));
+        }
+    }
+    g.finish();
     let mut g = c.benchmark_group("contact/rope_on_ground_step");
     for n in [100usize, 1000] {
         for (name, contacts) in [("friction", Some(0.4)), ("frictionless", Some(0.0)), ("no_contacts", None)] {

@@ -111,7 +111,7 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 26] = [
+const COMPARED: [&str; 27] = [
     "axial_bounce",
     "bend_45",
     "boom_hoist",
@@ -130,6 +130,7 @@ const COMPARED: [&str; 26] = [
     "payload_set_down",
     "pendulum_60deg",
     "perf_swing_1000",
+    "rope_crossing",
     "rope_on_ground",
     "rope_on_slope",
     "rope_over_cylinder",
@@ -176,6 +177,7 @@ same_rows!(
     payload_set_down,
     pendulum_60deg,
     perf_swing_1000,
+    rope_crossing,
     rope_on_ground,
     rope_on_slope,
     rope_over_cylinder,

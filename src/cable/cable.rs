@@ -362,7 +362,7 @@ impl Cable {
 
     /// The link and the point in its frame at arc length `s` (m) of rope
     /// `rope`, from that rope's start in its user's direction.
-    fn rope_point(&self, rope: usize, s: f64) -> Option<(usize, DVec3)> {
+    pub(crate) fn rope_point(&self, rope: usize, s: f64) -> Option<(usize, DVec3)> {
         let view = self.rope(rope)?;
         let (l, reversed, length) = (*view.layout(), view.reversed(), view.length());
         let (mut i, mut f) = locate(&l, if reversed { length - s } else { s });
@@ -733,16 +733,28 @@ impl RopeView<'_> {
 
     /// The sum of the normal forces of the contacts on this rope
     /// ([`ForceElement::contact_force`]: the [`SphereContact`](super::SphereContact)s
-    /// among its force elements) now, N.
+    /// among its force elements, and the [`PairContact`](super::PairContact)s
+    /// with another rope of the cable) now, N. Its contacts with itself
+    /// are internal and not counted.
     pub fn contact_force(&self) -> f64 {
         let ch = &self.cable.model.chain;
         let (first, last) = (self.layout.dof(0, 0), self.layout.dof(self.layout.elements, 0));
-        ch.forces()
+        let t = self.cable.state.t;
+        let own = ch
+            .forces()
             .iter()
             .zip(ch.force_element_points())
             .filter(|(f, _)| (first..last).contains(&f.link))
-            .filter_map(|(f, at)| f.element.contact_force(self.cable.state.t, &at))
-            .sum()
+            .filter_map(|(f, at)| f.element.contact_force(t, &at));
+        // Contacts with another rope of the cable count; a rope's contacts
+        // with itself are internal and do not.
+        let other = ch
+            .pairs()
+            .iter()
+            .zip(ch.pair_wrenches(t))
+            .filter(|(p, _)| (first..last).contains(&p.link_a) != (first..last).contains(&p.link_b))
+            .filter_map(|(p, (a, b, _))| p.element.contact_force(t, &a, &b));
+        own.sum::<f64>() + other.sum::<f64>()
     }
 
     /// Axial tension (N) at arc length `s` (m, from the user's start): the

@@ -48,7 +48,7 @@
 use glam::{DMat3, DVec3};
 
 use super::chain::rotation_vector;
-use super::force::{ForceElement, PointState, PointWrench};
+use super::force::{ForceElement, PairElement, PairWrench, PointState, PointWrench};
 use super::spatial::{outer3, skew, M6};
 
 /// Why a contact law cannot be built.
@@ -357,6 +357,52 @@ fn unwrap_turn(rv: DVec3, estimate: DVec3) -> DVec3 {
 fn at_arm(arm: DVec3, m: DMat3) -> M6 {
     let s = skew(arm);
     M6 { a: -(s * m * s), b: s * m, c: -(m * s), d: m }
+}
+
+/// A contact between two material points of one chain (a rope touching
+/// itself, or another rope of its tree): two spheres whose radii sum to
+/// `radius` pushed apart along `normal` (from the second point to the
+/// first), frozen for the step as a contact's plane is. Penetration
+/// `δ = radius − (p_a − p_b)·n`, its rate `δ̇ = −(v_a − v_b)·n`, the
+/// force `F_n(δ, δ̇) n` of the [`ImpactLaw`] on the first point and the
+/// opposite on the second, with the tangents `∂F_n/∂δ n nᵀ` and
+/// `∂F_n/∂δ̇ n nᵀ`; frictionless.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairContact {
+    /// Unit normal from the second point to the first, world.
+    pub normal: DVec3,
+    /// Sum of the two spheres' radii, m.
+    pub radius: f64,
+    /// The normal law.
+    pub law: ImpactLaw,
+}
+
+impl PairContact {
+    /// Penetration (m, > 0 when touching) and its rate (m/s).
+    pub fn depth(&self, a: &PointState, b: &PointState) -> (f64, f64) {
+        (self.radius - (a.point - b.point).dot(self.normal), -(a.velocity - b.velocity).dot(self.normal))
+    }
+}
+
+impl PairElement for PairContact {
+    fn wrench(&self, _t: f64, a: &PointState, b: &PointState) -> PairWrench {
+        let (depth, rate) = self.depth(a, b);
+        let (f, k, c) = self.law.force(depth, rate);
+        if f == 0.0 {
+            return PairWrench::default();
+        }
+        let nn = outer3(self.normal, self.normal);
+        PairWrench { force: self.normal * f, stiffness: nn * k, damping: nn * c, normal: Some(self.normal) }
+    }
+
+    fn energy(&self, _t: f64, a: &PointState, b: &PointState) -> f64 {
+        self.law.potential(self.depth(a, b).0)
+    }
+
+    fn contact_force(&self, _t: f64, a: &PointState, b: &PointState) -> Option<f64> {
+        let (depth, rate) = self.depth(a, b);
+        Some(self.law.force(depth, rate).0)
+    }
 }
 
 impl ForceElement for SphereContact {

@@ -147,3 +147,94 @@ pub(crate) fn point_to_spatial(k: &M6, px: DMat3) -> M6 {
     let b = k.b + px * k.d;
     M6 { a: k.a + px * k.c + b * pxt, b, c: k.c + k.d * pxt, d: k.d }
 }
+
+/// What a [`PairElement`] applies between its two points, world frame: a
+/// force on the first point (the second gets the opposite), with its
+/// tangents with respect to the points' relative motion.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PairWrench {
+    /// Force on the first point, N (the second point gets `−force`).
+    pub force: DVec3,
+    /// Stiffness `−∂force/∂(p_a − p_b)`, N/m.
+    pub stiffness: DMat3,
+    /// Damping `−∂force/∂(v_a − v_b)`, N·s/m.
+    pub damping: DMat3,
+    /// The one direction (unit) the force and both tangents act along
+    /// (`stiffness` and `damping` multiples of `n nᵀ`: a frictionless
+    /// contact), if any: the solve then couples the two points along it
+    /// alone (two back-substitutions per pair instead of six).
+    pub normal: Option<DVec3>,
+}
+
+/// A force law between two material points of a chain (on two links, or
+/// twice the same link), evaluated at every Newton iteration with its
+/// tangents: a contact of a rope with itself or with another rope of the
+/// same cable, a spring between two links. The two points are anywhere in
+/// the chain's tree, so the law closes a loop; the chain's solve accounts
+/// for that coupling exactly (a small dense correction over the pairs,
+/// see [`Chain::pairs`](super::chain::Chain::pairs)), not only for each
+/// point's own stiffness.
+pub trait PairElement: Send + Sync {
+    /// The force at time `t` (s) with the points at `a` and `b`.
+    fn wrench(&self, t: f64, a: &PointState, b: &PointState) -> PairWrench;
+
+    /// Potential energy stored in the element, J (0 for a dissipative one);
+    /// counted in [`Cable::energy`](super::cable::Cable::energy).
+    fn energy(&self, _t: f64, _a: &PointState, _b: &PointState) -> f64 {
+        0.0
+    }
+
+    /// The normal force (N, ≥ 0) if the element is a contact, `None`
+    /// otherwise: what a cable's `contact_force` reports.
+    fn contact_force(&self, _t: f64, _a: &PointState, _b: &PointState) -> Option<f64> {
+        None
+    }
+}
+
+/// A [`PairElement`] between two links of a chain.
+#[derive(Clone)]
+pub struct AttachedPair {
+    /// Sub-joint index whose link carries the first point.
+    pub link_a: usize,
+    /// The first point in its link's frame, m.
+    pub point_a: DVec3,
+    /// Sub-joint index whose link carries the second point.
+    pub link_b: usize,
+    /// The second point in its link's frame, m.
+    pub point_b: DVec3,
+    /// The law.
+    pub element: Arc<dyn PairElement>,
+}
+
+impl std::fmt::Debug for AttachedPair {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("AttachedPair").field("link_a", &self.link_a).field("link_b", &self.link_b).finish_non_exhaustive()
+    }
+}
+
+/// A linear spring–damper between two points: `f_a = −k (p_a − p_b) −
+/// c (v_a − v_b)` on the first (N), the opposite on the second; zero rest
+/// length. The simplest [`PairElement`] (tests, and a user's tether
+/// between two links).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairSpring {
+    /// Stiffness, N/m (≥ 0).
+    pub stiffness: f64,
+    /// Damping, N·s/m (≥ 0).
+    pub damping: f64,
+}
+
+impl PairElement for PairSpring {
+    fn wrench(&self, _t: f64, a: &PointState, b: &PointState) -> PairWrench {
+        PairWrench {
+            force: -(a.point - b.point) * self.stiffness - (a.velocity - b.velocity) * self.damping,
+            stiffness: DMat3::from_diagonal(DVec3::splat(self.stiffness)),
+            damping: DMat3::from_diagonal(DVec3::splat(self.damping)),
+            normal: None,
+        }
+    }
+
+    fn energy(&self, _t: f64, a: &PointState, b: &PointState) -> f64 {
+        0.5 * self.stiffness * a.point.distance_squared(b.point)
+    }
+}

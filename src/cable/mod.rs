@@ -4,9 +4,9 @@ pub mod material;
 pub use self::material::{preset, RopeMaterial, RopeSection, PRESET_NAMES};
 pub mod chain;
 pub mod contact;
-pub use self::contact::{ContactError, CoulombFriction, ImpactLaw, SphereContact};
+pub use self::contact::{ContactError, CoulombFriction, ImpactLaw, PairContact, SphereContact};
 pub mod force;
-pub use self::force::{AttachedForce, ForceElement, PointSpring, PointState, PointWrench};
+pub use self::force::{AttachedForce, AttachedPair, ForceElement, PairElement, PairSpring, PairWrench, PointSpring, PointState, PointWrench};
 pub mod spatial;
 pub use self::chain::{
     AnchorSpring, BaseMotion, BaseState, Chain, ChainError, JointKind, Limb, LinkLoad, LinkMass, RotationSpring, SampledMotion, SpringLaw, StaticError,

@@ -279,6 +279,14 @@ fn link_update_agrees_with_the_sum_to_first_order() {
 }
 
 /// A short free rope pinned at the origin of the fixed frame `base`.
+/// The origin of the end body of `m` as laid (its kinematics at `q0`).
+fn laid_body_origin(m: &mut RopeModel) -> DVec3 {
+    let n = m.q0.len();
+    let (z, mut r) = (vec![0.0; n], vec![0.0; n]);
+    m.chain.residual_into(0.0, &m.q0, &z, &z, &mut r).unwrap();
+    m.body_state(&m.layout.end_body.unwrap()).0
+}
+
 fn tail(base: BaseMotion) -> RopeModel {
     let apex = base.at(0.0).position;
     RopeBuilder::new(0.62, 3, soft_section(), 0.05)
@@ -298,12 +306,7 @@ fn tangent_matches_finite_differences_on_a_tree() {
     for (seed, c_q) in [(7, 1.0), (8, 1e-2), (9, 1e-4)] {
         let mut m = loaded_rope(payload(), true);
         let body = m.layout.end_body.unwrap();
-        let apex = {
-            let n = m.q0.len();
-            let (z, mut r) = (vec![0.0; n], vec![0.0; n]);
-            m.chain.residual_into(0.0, &m.q0, &z, &z, &mut r).unwrap();
-            m.body_state(&body).0
-        };
+        let apex = laid_body_origin(&mut m);
         let pin = BaseMotion::point(apex + DVec3::new(0.8, 0.7, -0.1));
         let base = BaseMotion::Fixed(BaseState::fixed(DMat3::from_rotation_y(0.4), apex));
         let leg = RopeBuilder::new(1.1, 4, soft_section(), 0.05)
@@ -472,5 +475,93 @@ fn friction_contact_tangents_match_finite_differences() {
     for c_q in [1.0, 1e-3] {
         let err = check_tangent_at(&mut m, &q, &mut rng, c_q);
         assert!(err < 1e-7, "friction contacts: stiffness tangent residual {err:e} at c_q = {c_q}");
+    }
+}
+
+/// Pair elements (issue 12: a rope touching itself, or another rope of
+/// its tree) close loops in the chain: the solve with the pair correction
+/// is the exact tangent, measured against the residual's finite
+/// differences as `check_tangent` does, on the serial chain (two points
+/// far apart along the rope, and a point against the payload) and on the
+/// tree (a point of one limb against a point of another). Without the
+/// correction (each point's own stiffness only) the same check fails by
+/// orders of magnitude: the coupling is the loop.
+#[test]
+fn pair_element_tangents_match_finite_differences() {
+    let spring = |k: f64| Arc::new(PairSpring { stiffness: k, damping: 0.0 });
+    // Serial: a stiff pair between elements 1 and 4, and one between
+    // element 2 and the payload.
+    let mut m = loaded_rope(payload(), true);
+    let body_link = m.layout.end_body.as_ref().unwrap().link;
+    let (e1, e2, e4) = (m.layout.element_link(1), m.layout.element_link(2), m.layout.element_link(4));
+    m.chain.pairs_mut().push(AttachedPair {
+        link_a: e1,
+        point_a: DVec3::new(0.05, 0.01, 0.0),
+        link_b: e4,
+        point_b: DVec3::new(-0.02, 0.0, 0.03),
+        element: spring(5e4),
+    });
+    m.chain.pairs_mut().push(AttachedPair {
+        link_a: e2,
+        point_a: DVec3::new(0.0, 0.02, -0.01),
+        link_b: body_link,
+        point_b: DVec3::new(0.1, 0.0, 0.0),
+        element: spring(2e3),
+    });
+    for (seed, c_q) in [(21, 1.0), (22, 1e-2), (23, 1e-4)] {
+        let err = check_tangent(&mut m, seed, c_q);
+        eprintln!("serial pairs c_q={c_q}: {err:e}");
+        assert!(err < 1e-6, "pair elements (serial): tangent residual {err:e} at c_q = {c_q}");
+    }
+    // A contact (one direction: the rank-one path of the correction),
+    // pressed at every configuration the check visits (a large radius).
+    let (e3, e0) = (m.layout.element_link(3), m.layout.element_link(0));
+    let normal = DVec3::new(0.6, 0.0, 0.8);
+    let apart = {
+        let nq = m.q0.len();
+        let (z, mut r) = (vec![0.0; nq], vec![0.0; nq]);
+        m.chain.residual_into(0.0, &m.q0, &z, &z, &mut r).unwrap();
+        (m.chain.link_point(e3, DVec3::new(0.02, 0.0, 0.0)).unwrap() - m.chain.link_point(e0, DVec3::ZERO).unwrap()).dot(normal)
+    };
+    let law = ImpactLaw::new(3e4, 1.5, 0.0, 1e-3).unwrap();
+    let pressed = PairContact { normal, radius: apart + 0.2, law };
+    m.chain.pairs_mut().push(AttachedPair { link_a: e3, point_a: DVec3::new(0.02, 0.0, 0.0), link_b: e0, point_b: DVec3::ZERO, element: Arc::new(pressed) });
+    for (seed, c_q) in [(24, 1.0), (25, 1e-3)] {
+        let err = check_tangent(&mut m, seed, c_q);
+        eprintln!("serial pairs with a contact c_q={c_q}: {err:e}");
+        assert!(err < 1e-6, "pair elements with a contact: tangent residual {err:e} at c_q = {c_q}");
+    }
+    // The same solve without the loop coupling (each point's own
+    // stiffness only) is far off.
+    m.chain.pair_coupling = false;
+    let err = check_tangent(&mut m, 21, 1.0);
+    m.chain.pair_coupling = true;
+    eprintln!("serial pairs without the coupling: {err:e}");
+    assert!(err > 1e-2, "the pair coupling should matter: {err:e}");
+    // Tree: a pair between the pinned leg and the free tail.
+    let mut t = loaded_rope(payload(), true);
+    let body = t.layout.end_body.unwrap();
+    let apex = laid_body_origin(&mut t);
+    let base = BaseMotion::Fixed(BaseState::fixed(DMat3::from_rotation_y(0.4), apex));
+    t.graft(tail(base.clone()), &body, false).unwrap();
+    t.graft(tail(BaseMotion::Fixed(BaseState::fixed(DMat3::from_rotation_y(-0.7), apex))), &body, false).unwrap();
+    t.chain.rotation_springs_mut().clear();
+    let limbs: Vec<usize> = t.chain.limbs().iter().map(|l| l.first).collect();
+    assert_eq!(limbs.len(), 2);
+    // The last sub-joint of each limb's first element carries its link.
+    let first_link = |first: usize| (first..t.chain.len()).find(|&s| t.chain.joints()[s].link.is_some()).unwrap();
+    let (la, lb) = (first_link(limbs[0]), first_link(limbs[1]));
+    t.chain.pairs_mut().push(AttachedPair {
+        link_a: la,
+        point_a: DVec3::new(0.03, 0.0, 0.0),
+        link_b: lb,
+        point_b: DVec3::new(0.0, 0.04, 0.0),
+        element: spring(3e4),
+    });
+    t.chain.pairs_mut().push(AttachedPair { link_a: la, point_a: DVec3::ZERO, link_b: e1, point_b: DVec3::ZERO, element: spring(1e4) });
+    for (seed, c_q) in [(31, 1.0), (32, 1e-2), (33, 1e-4)] {
+        let err = check_tangent(&mut t, seed, c_q);
+        eprintln!("tree pairs c_q={c_q}: {err:e}");
+        assert!(err < 1e-6, "pair elements (tree): tangent residual {err:e} at c_q = {c_q}");
     }
 }

@@ -21,7 +21,7 @@
 //! first contact step.
 
 use super::{BodyMotion, CarriedLink};
-use crate::cable::{AttachedForce, BaseState, Cable, ContactError, CoulombFriction, ImpactLaw, PointState, SphereContact};
+use crate::cable::{AttachedForce, AttachedPair, BaseState, Cable, ContactError, CoulombFriction, ImpactLaw, PairContact, PointState, SphereContact};
 use glam::{DMat3, DVec3};
 use rapier3d::prelude as rp;
 use std::collections::HashMap;
@@ -610,9 +610,149 @@ pub(crate) fn add_body_contacts(
     (any, approach)
 }
 
-/// Drops the force elements past `keep` (the last step's contacts).
-pub(crate) fn clear(cable: &mut Cable, keep: usize) {
+/// Drops the force elements past `keep` and the pair elements past
+/// `keep_pairs` (the last step's contacts).
+pub(crate) fn clear(cable: &mut Cable, keep: usize, keep_pairs: usize) {
     cable.model.chain.forces_mut().truncate(keep);
+    cable.model.chain.pairs_mut().truncate(keep_pairs);
+}
+
+/// An element of one of a cable's ropes at the step's start, for the
+/// contacts of the cable with itself.
+struct Segment {
+    rope: usize,
+    element: usize,
+    a: DVec3,
+    b: DVec3,
+    va: DVec3,
+    vb: DVec3,
+    element_length: f64,
+}
+
+/// The parameters `(s, t)` in [0, 1] of the closest points of the
+/// segments `p1 + s (q1 − p1)` and `p2 + t (q2 − p2)`.
+fn closest_on_segments(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (f64, f64) {
+    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
+    let (a, e, f) = (d1.length_squared(), d2.length_squared(), d2.dot(r));
+    if a <= 1e-300 && e <= 1e-300 {
+        return (0.0, 0.0);
+    }
+    if a <= 1e-300 {
+        return (0.0, (f / e).clamp(0.0, 1.0));
+    }
+    let c = d1.dot(r);
+    if e <= 1e-300 {
+        return ((-c / a).clamp(0.0, 1.0), 0.0);
+    }
+    let b = d1.dot(d2);
+    let denom = a * e - b * b;
+    let mut s = if denom > 1e-12 * a * e { ((b * f - c * e) / denom).clamp(0.0, 1.0) } else { 0.0 };
+    let mut t = (b * s + f) / e;
+    if t < 0.0 {
+        t = 0.0;
+        s = (-c / a).clamp(0.0, 1.0);
+    } else if t > 1.0 {
+        t = 1.0;
+        s = ((b - c) / a).clamp(0.0, 1.0);
+    }
+    (s, t)
+}
+
+/// Adds this step's contacts of `cable` with itself: every two elements
+/// of its ropes (of one rope, or of two ropes of its tree) whose capsules
+/// of the rope's radius come within the speculative reach (twice what
+/// their relative speed closes in the step, plus half a radius) get a
+/// [`PairContact`] between their nearest material points, with the
+/// direction between them as its normal, frozen for the step. Elements of
+/// one rope nearer along it than half a turn of the rope around itself
+/// (`π r`) are left out: a rope cannot fold that tight, and neighbours
+/// always touch. Candidates come from a sweep over the elements' boxes
+/// along the axis of their largest spread (O(n log n) for a rope that is
+/// not balled up).
+/// Returns how fast the contacts close (m/s), for the step's passes.
+pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, h: f64) -> f64 {
+    let radius = 0.5 * cable.model.diameter;
+    let mut segments = Vec::new();
+    for rope in 0..cable.ropes() {
+        let Some(view) = cable.rope(rope) else {
+            continue;
+        };
+        let (nodes, velocities) = (view.nodes(), view.node_velocities());
+        let element_length = view.layout().element_length;
+        for i in 0..nodes.len().saturating_sub(1) {
+            let (va, vb) = (velocities[i], velocities[i + 1]);
+            segments.push(Segment { rope, element: i, a: nodes[i], b: nodes[i + 1], va, vb, element_length });
+        }
+    }
+    // Two elements close at their relative speed: each box is padded by
+    // the rope's radius and twice its speed relative to the cable's mean
+    // (a swinging rope's elements move together).
+    let mean = segments.iter().fold(DVec3::ZERO, |m, g| m + g.va + g.vb) / (2.0 * segments.len().max(1) as f64);
+    let pad = |g: &Segment| radius + 2.0 * h * (g.va - mean).length().max((g.vb - mean).length());
+    let bounds = |g: &Segment| (g.a.min(g.b) - DVec3::splat(pad(g)), g.a.max(g.b) + DVec3::splat(pad(g)));
+    // Candidates: a sweep over the boxes along the axis in which the
+    // elements spread most (a rope's length, for a rope that is not balled
+    // up, so each element meets only its neighbours along the rope and
+    // whatever crosses it). Sorted with a total order: the same pairs in
+    // the same order on every run (each pair with its lower-numbered
+    // element first).
+    let boxes: Vec<(DVec3, DVec3)> = segments.iter().map(bounds).collect();
+    let (lo_all, hi_all) = boxes.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), b| (l.min(b.0), h.max(b.1)));
+    let spread = hi_all - lo_all;
+    let axis = if spread.x >= spread.y && spread.x >= spread.z {
+        0
+    } else if spread.y >= spread.z {
+        1
+    } else {
+        2
+    };
+    let mut order: Vec<usize> = (0..segments.len()).collect();
+    order.sort_by(|&i, &j| boxes[i].0[axis].total_cmp(&boxes[j].0[axis]).then(i.cmp(&j)));
+    let mut approach = 0.0f64;
+    let mut pairs = Vec::new();
+    for (k, &i) in order.iter().enumerate() {
+        for &j in &order[k + 1..] {
+            if boxes[j].0[axis] > boxes[i].1[axis] {
+                break;
+            }
+            let (gi, gj) = (&segments[i.min(j)], &segments[i.max(j)]);
+            if gi.rope == gj.rope && (gi.element.abs_diff(gj.element).saturating_sub(1) as f64) * gi.element_length < std::f64::consts::PI * radius {
+                continue;
+            }
+            if boxes[j].0.cmpgt(boxes[i].1).any() || boxes[j].1.cmplt(boxes[i].0).any() {
+                continue;
+            }
+            // Cheap rejection first (most candidates are a rope's
+            // neighbours moving with it): the midpoints farther apart than
+            // the two half lengths, the two radii and the reach of their
+            // fastest relative node motion.
+            let fastest = (gi.va - gj.va).length().max((gi.va - gj.vb).length()).max((gi.vb - gj.va).length()).max((gi.vb - gj.vb).length());
+            let half = 0.5 * (gi.a.distance(gi.b) + gj.a.distance(gj.b));
+            if (gi.a + gi.b).distance(gj.a + gj.b) * 0.5 - half - 2.0 * radius > 2.0 * h * fastest + 0.5 * radius {
+                continue;
+            }
+            let (fa, fb) = closest_on_segments(gi.a, gi.b, gj.a, gj.b);
+            let (pa, pb) = (gi.a.lerp(gi.b, fa), gj.a.lerp(gj.b, fb));
+            let d = pa.distance(pb);
+            let relative = gi.va.lerp(gi.vb, fa) - gj.va.lerp(gj.vb, fb);
+            let reach = 2.0 * h * relative.length() + 0.5 * radius;
+            if d - 2.0 * radius > reach || d <= 1e-9 * radius {
+                continue;
+            }
+            let normal = (pa - pb) / d;
+            approach = approach.max(-relative.dot(normal));
+            let (Some((link_a, point_a)), Some((link_b, point_b))) = (
+                cable.rope_point(gi.rope, (gi.element as f64 + fa) * gi.element_length),
+                cable.rope_point(gj.rope, (gj.element as f64 + fb) * gj.element_length),
+            ) else {
+                continue;
+            };
+            let element = PairContact { normal, radius: 2.0 * radius, law: contact.law };
+            pairs.push(AttachedPair { link_a, point_a, link_b, point_b, element: Arc::new(element) });
+        }
+    }
+    cable.model.chain.pairs_mut().extend(pairs);
+    approach
 }
 
 #[cfg(test)]

@@ -354,6 +354,8 @@ pub struct CoupledCable {
     pub contact: Option<CableContact>,
     /// Number of force elements that are not this step's contacts.
     fixed_forces: usize,
+    /// Number of pair elements that are not this step's contacts.
+    fixed_pairs: usize,
     /// The friction anchors of its contacts, from step to step.
     friction: contact::FrictionMemory,
     /// Whether this step's contacts include the carried bodies' own with
@@ -980,6 +982,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
     let cable = Cable::new(model, spec.scheme.clone()).map_err(|e| CouplingError::Cable(Box::new(e)))?;
     let fixed_loads = cable.model.chain.loads().len();
     let fixed_forces = cable.model.chain.forces().len();
+    let fixed_pairs = cable.model.chain.pairs().len();
     Ok(CoupledCable {
         cable,
         roles,
@@ -989,6 +992,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         fixed_loads,
         contact: spec.contact,
         fixed_forces,
+        fixed_pairs,
         friction: contact::FrictionMemory::default(),
         body_contacts: false,
         failed: false,
@@ -1110,7 +1114,7 @@ pub fn step_cables(
         let mut own = Vec::new();
         let mut count = 1;
         if !cc.failed {
-            contact::clear(&mut cc.cable, cc.fixed_forces);
+            contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
             cc.friction.discard_step();
             cc.body_contacts = false;
             if let Some(settings) = cc.contact {
@@ -1123,6 +1127,7 @@ pub fn step_cables(
                 own = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).chain(rails.flatten()).collect();
                 let start = cc.cable.time();
                 let ropes = contact::add_contacts(&mut cc.cable, &settings, &mut cc.friction, &contacts, bodies, &own, h, start);
+                let ropes = ropes.max(contact::add_self_contacts(&mut cc.cable, &settings, h));
                 let (any, carried) = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, &own, h, start);
                 cc.body_contacts = any;
                 cc.friction.attach(&mut cc.cable, cc.fixed_forces);
@@ -1155,9 +1160,10 @@ pub fn step_cables(
             for k in 0..count {
                 // Contacts found again at the pass's start, with the pass's
                 // speculative reach (the first pass too).
-                contact::clear(&mut cc.cable, cc.fixed_forces);
+                contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
                 cc.friction.discard_step();
                 contact::add_contacts(&mut cc.cable, &settings, &mut cc.friction, &contacts, bodies, own, hp, start);
+                contact::add_self_contacts(&mut cc.cable, &settings, hp);
                 cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, own, hp, start).0;
                 cc.friction.attach(&mut cc.cable, cc.fixed_forces);
                 if !advance_by(cc, hp, n) {

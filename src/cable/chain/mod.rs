@@ -27,7 +27,7 @@ pub use nonsmooth::StaticError;
 pub use parts::*;
 pub(crate) use sweep::*;
 
-use super::force::{AttachedForce, ForceElement, PointState, PointWrench};
+use super::force::{AttachedForce, AttachedPair, ForceElement, PairWrench, PointState, PointWrench};
 use super::spatial::{M6, V6};
 use crate::integrate::SystemError;
 use glam::{DMat3, DVec3};
@@ -99,6 +99,15 @@ pub struct Chain {
     anchors: Vec<AnchorSpring>,
     /// Other implicit force elements (user laws, contact, drag).
     forces: Vec<AttachedForce>,
+    /// Force elements between two points of the chain (self-contact, a
+    /// rope on another rope of the tree).
+    pairs: Vec<AttachedPair>,
+    /// Per pair at the last residual: the points (relative to `origin`)
+    /// and the tangents, for the solve's loop correction.
+    pub(crate) pair_scratch: Vec<PairScratch>,
+    /// Tests only: `false` leaves the pair correction out of the solve.
+    #[cfg(test)]
+    pub(crate) pair_coupling: bool,
     /// External loads of fixed direction (explicit in value, their geometric
     /// stiffness implicit).
     loads: Vec<LinkLoad>,
@@ -177,6 +186,10 @@ impl Chain {
             origin,
             anchors: Vec::new(),
             forces: Vec::new(),
+            pairs: Vec::new(),
+            pair_scratch: Vec::new(),
+            #[cfg(test)]
+            pair_coupling: true,
             loads: Vec::new(),
             joint_forces: vec![0.0; n],
             rotation_springs: Vec::new(),
@@ -206,7 +219,12 @@ impl Chain {
 
     /// The links that carry loads, anchors or force elements, in that order.
     fn loaded_links(&self) -> impl Iterator<Item = usize> + '_ {
-        self.loads.iter().map(|l| l.link).chain(self.anchors.iter().map(|a| a.link)).chain(self.forces.iter().map(|f| f.link))
+        self.loads
+            .iter()
+            .map(|l| l.link)
+            .chain(self.anchors.iter().map(|a| a.link))
+            .chain(self.forces.iter().map(|f| f.link))
+            .chain(self.pairs.iter().flat_map(|p| [p.link_a, p.link_b]))
     }
 
     /// Assigns link scratch slots to links with mass, loads, anchors or
@@ -222,7 +240,7 @@ impl Chain {
         let same = key.built
             && key.n == n
             && self.poses.len() == n
-            && key.links.len() == self.loads.len() + self.anchors.len() + self.forces.len()
+            && key.links.len() == self.loads.len() + self.anchors.len() + self.forces.len() + 2 * self.pairs.len()
             && key.springs.len() == self.rotation_springs.len()
             && key.links.iter().copied().eq(self.loaded_links())
             && key.springs.iter().copied().eq(self.rotation_springs.iter().map(|r| r.first))
@@ -284,7 +302,8 @@ impl Chain {
         self.links.clear();
         self.links.resize(count as usize, LinkScratch::default());
         self.anchor_blocks.clear();
-        for link in self.anchors.iter().map(|a| a.link).chain(self.forces.iter().map(|f| f.link)) {
+        let pair_links: Vec<usize> = self.pairs.iter().flat_map(|p| [p.link_a, p.link_b]).collect();
+        for link in self.anchors.iter().map(|a| a.link).chain(self.forces.iter().map(|f| f.link)).chain(pair_links) {
             let ls = &mut self.links[self.link_slot[link] as usize];
             if ls.anchor == u32::MAX {
                 ls.anchor = self.anchor_blocks.len() as u32;
@@ -332,6 +351,11 @@ impl Chain {
         for (k, f) in self.forces.iter().enumerate() {
             if f.link >= len {
                 return bad(format!("force element {k}"), f.link);
+            }
+        }
+        for (k, p) in self.pairs.iter().enumerate() {
+            if p.link_a >= len || p.link_b >= len {
+                return bad(format!("pair element {k}"), p.link_a.max(p.link_b));
             }
         }
         for (k, r) in self.rotation_springs.iter().enumerate() {
@@ -439,6 +463,37 @@ impl Chain {
         &mut self.forces
     }
 
+    /// Force elements between two points of the chain ([`PairElement`](super::force::PairElement)):
+    /// each closes a loop in the chain's tree, and the solve accounts for
+    /// the coupling of its two points exactly: after the O(n) sweep, a
+    /// Woodbury correction over the pairs (six O(n) back-substitutions per
+    /// pair and a dense system of six unknowns per pair), so Newton keeps
+    /// its rate however stiff the pair is (docs/architecture.md,
+    /// "Contact").
+    pub fn pairs(&self) -> &[AttachedPair] {
+        &self.pairs
+    }
+
+    /// The pair elements, to add, edit or remove; links checked at the next
+    /// evaluation.
+    pub fn pairs_mut(&mut self) -> &mut Vec<AttachedPair> {
+        &mut self.pairs
+    }
+
+    /// The world states of each pair element's two points ([`Chain::pairs`],
+    /// in order) and the force the element applies at time `t` (s), at the
+    /// last kinematics pass's poses.
+    pub fn pair_wrenches(&self, t: f64) -> Vec<(PointState, PointState, PairWrench)> {
+        self.pairs
+            .iter()
+            .map(|p| {
+                let a = point_state(&self.poses[p.link_a], self.origin, p.point_a).0;
+                let b = point_state(&self.poses[p.link_b], self.origin, p.point_b).0;
+                (a, b, p.element.wrench(t, &a, &b))
+            })
+            .collect()
+    }
+
     /// Objective bending–torsion laws replacing the per-angle springs of
     /// their three sub-joints.
     pub fn rotation_springs(&self) -> &[RotationSpring] {
@@ -501,6 +556,10 @@ impl Chain {
         self.loads.iter_mut().for_each(|l| shift(&mut l.link));
         self.anchors.iter_mut().for_each(|a| shift(&mut a.link));
         self.forces.iter_mut().for_each(|f| shift(&mut f.link));
+        self.pairs.iter_mut().for_each(|p| {
+            shift(&mut p.link_a);
+            shift(&mut p.link_b);
+        });
         self.rotation_springs.iter_mut().for_each(|r| shift(&mut r.first));
         for l in &mut self.limbs {
             // A limb starting at `at` keeps the new sub-joints as its start.
@@ -542,6 +601,9 @@ impl Chain {
         if let Some(k) = self.forces.iter().position(|f| inside(f.link)) {
             return refuse(format!("force element {k} acts on link {}", self.forces[k].link));
         }
+        if let Some(k) = self.pairs.iter().position(|p| inside(p.link_a) || inside(p.link_b)) {
+            return refuse(format!("pair element {k} acts on links {} and {}", self.pairs[k].link_a, self.pairs[k].link_b));
+        }
         if let Some(k) = self.rotation_springs.iter().position(|r| (r.first..r.first + 3).any(inside)) {
             return refuse(format!("rotation spring {k} uses sub-joints {}..={}", self.rotation_springs[k].first, self.rotation_springs[k].first + 2));
         }
@@ -566,6 +628,10 @@ impl Chain {
         self.loads.iter_mut().for_each(|l| shift(&mut l.link));
         self.anchors.iter_mut().for_each(|a| shift(&mut a.link));
         self.forces.iter_mut().for_each(|f| shift(&mut f.link));
+        self.pairs.iter_mut().for_each(|p| {
+            shift(&mut p.link_a);
+            shift(&mut p.link_b);
+        });
         self.rotation_springs.iter_mut().for_each(|r| shift(&mut r.first));
         for l in &mut self.limbs {
             shift(&mut l.first);
@@ -699,7 +765,8 @@ impl Chain {
     pub fn force_element_energy(&self, t: f64) -> f64 {
         let at = |link: usize, local: DVec3| point_state(&self.poses[link], self.origin, local).0;
         let anchors = self.anchors.iter().map(|a| a.energy(t, &at(a.link, a.local_point)));
-        anchors.chain(self.forces.iter().map(|f| f.element.energy(t, &at(f.link, f.local_point)))).sum()
+        let pairs = self.pairs.iter().map(|p| p.element.energy(t, &at(p.link_a, p.point_a), &at(p.link_b, p.point_b)));
+        anchors.chain(self.forces.iter().map(|f| f.element.energy(t, &at(f.link, f.local_point)))).chain(pairs).sum()
     }
 
     /// Total load the chain puts on its base at the last residual

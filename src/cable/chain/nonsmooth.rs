@@ -103,12 +103,12 @@ impl SecondOrderSystem for Chain {
     /// slow Newton to a linear rate (docs/architecture.md, "Force
     /// elements").
     fn patient_newton(&self) -> bool {
-        !self.forces.is_empty()
+        !self.forces.is_empty() || !self.pairs.is_empty()
     }
     fn nonlinear_update(&mut self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) -> bool {
         // Only a chain closed by anchor springs needs it (an open chain's
         // tip is free, and the plain sum costs nothing).
-        if self.anchors.is_empty() && self.forces.is_empty() {
+        if self.anchors.is_empty() && self.forces.is_empty() && self.pairs.is_empty() {
             return false;
         }
         self.link_update(q, dx, scale, out);

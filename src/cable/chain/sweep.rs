@@ -35,6 +35,20 @@ impl LimbCarry {
     }
 }
 
+/// What the solve needs of a pair element at the last residual: its two
+/// points (relative to the chain's origin) and its tangents.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PairScratch {
+    pub link_a: usize,
+    pub link_b: usize,
+    pub pa: DVec3,
+    pub pb: DVec3,
+    pub stiffness: DMat3,
+    pub damping: DMat3,
+    /// The one direction of the force and tangents, if any.
+    pub normal: Option<DVec3>,
+}
+
 /// Pose of a sub-joint's link, rebuilt by every kinematics pass.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Pose {
@@ -235,7 +249,7 @@ impl Chain {
     ) -> Result<(), SystemError> {
         self.sweep(t, q, v, a, rhs, Some((c_v, c_q)))?;
         self.forward_solve(x);
-        Ok(())
+        self.pair_correction(c_v, c_q, x)
     }
 
     /// Forward kinematics, loads, and the tip-to-base sweep. Without
@@ -269,6 +283,24 @@ impl Chain {
         for fe in &self.forces {
             let slot = self.link_slot[fe.link] as usize;
             apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[fe.link], self.origin, fe.local_point, t, fe.element.as_ref());
+        }
+        // Pair elements: each point's own tangent on its link, as a point
+        // element's; their coupling is the solve's pair correction.
+        self.pair_scratch.clear();
+        for pr in &self.pairs {
+            let (at_a, pa) = point_state(&self.poses[pr.link_a], self.origin, pr.point_a);
+            let (at_b, pb) = point_state(&self.poses[pr.link_b], self.origin, pr.point_b);
+            let w = pr.element.wrench(t, &at_a, &at_b);
+            for (link, p, f) in [(pr.link_a, pa, w.force), (pr.link_b, pb, -w.force)] {
+                let ls = &mut self.links[self.link_slot[link] as usize];
+                let px = skew(p);
+                let (k, c) = &mut self.anchor_blocks[ls.anchor as usize];
+                k.add_scaled(&point_to_spatial(&M6 { d: w.stiffness, ..M6::ZERO }, px), 1.0);
+                c.add_scaled(&point_to_spatial(&M6 { d: w.damping, ..M6::ZERO }, px), 1.0);
+                ls.f += V6::new(p.cross(f), f);
+                ls.add_point_load_tangent(f, p);
+            }
+            self.pair_scratch.push(PairScratch { link_a: pr.link_a, link_b: pr.link_b, pa, pb, stiffness: w.stiffness, damping: w.damping, normal: w.normal });
         }
         // Tip-to-base sweep: composite loads, residual, geometric stiffness.
         // The load tangent H = [[ha, hb], [0, 0]] is summed tip to base; its
@@ -369,6 +401,183 @@ impl Chain {
             }
         }
         self.forward_solve(x);
+        self.pair_correction(c_v, c_q, x)
+    }
+
+    /// Solves the last factorized tangent (the elimination of the last
+    /// [`Chain::residual_and_correction_into`] or [`Chain::solve_into`])
+    /// for another right-hand side `b`, without the pair correction: the
+    /// tip-to-base bias pass alone, then the forward substitution (O(n),
+    /// a fraction of a full solve). Overwrites the rows' `u`.
+    fn resolve(&mut self, b: &[f64], x: &mut [f64]) {
+        let tree = !self.limbs.is_empty();
+        if tree {
+            self.limb_carry.iter_mut().for_each(|c| c.bias = V6::ZERO);
+        }
+        let mut bias = V6::ZERO;
+        let mut next_limb = self.limbs.len();
+        for s in (0..self.joints.len()).rev() {
+            if tree && self.limb_parent[s] != u32::MAX {
+                bias += self.limb_carry[self.limb_parent[s] as usize].bias;
+            }
+            match self.block[s] {
+                u32::MAX => {
+                    let row = &mut self.rows[s];
+                    let u = b[s] - row.s.dot(bias);
+                    row.u = u;
+                    bias += row.u_vec * (u * row.d);
+                }
+                BLOCK_INNER => {}
+                k => {
+                    let f = &mut self.rows[s..s + 3];
+                    let ub = DVec3::new(b[s] - f[0].s.dot(bias), b[s + 1] - f[1].s.dot(bias), b[s + 2] - f[2].s.dot(bias));
+                    let y = self.rot_scratch[k as usize].1 * ub;
+                    for (j, r) in f.iter_mut().enumerate() {
+                        r.u = ub[j];
+                    }
+                    bias += f[0].u_vec * y.x + f[1].u_vec * y.y + f[2].u_vec * y.z;
+                }
+            }
+            if tree && self.limb_start[s] {
+                next_limb -= 1;
+                if let Some(p) = self.limbs[next_limb].parent {
+                    self.limb_carry[self.limb_parent[p] as usize].bias += bias;
+                }
+                bias = V6::ZERO;
+            }
+        }
+        self.forward_solve(x);
+    }
+
+    /// The sub-joint whose link is the parent of sub-joint `s`'s link
+    /// (`None`: the base).
+    fn joint_parent(&self, s: usize) -> Option<usize> {
+        if !self.limbs.is_empty() && self.limb_start[s] {
+            let k = self.limbs.partition_point(|l| l.first < s);
+            return self.limbs.get(k).and_then(|l| l.parent);
+        }
+        s.checked_sub(1)
+    }
+
+    /// The spatial motion of every link for the coordinate change `x`
+    /// (`Σ S_j x_j` over the link's ancestors), into `out`.
+    fn link_motions(&self, x: &[f64], out: &mut [V6]) {
+        for s in 0..self.joints.len() {
+            let parent = self.joint_parent(s).map_or(V6::ZERO, |p| out[p]);
+            out[s] = parent + self.rows[s].s * x[s];
+        }
+    }
+
+    /// The loop correction of the pair elements (see [`Chain::pairs`]):
+    /// the sweep's tangent `A` holds each pair point's own stiffness
+    /// `J_aᵀ K J_a + J_bᵀ K J_b` (`K = c_q K_p + c_v C_p`); the exact
+    /// tangent adds the coupling `−J_aᵀ K J_b − J_bᵀ K J_a`. With the
+    /// pair's directions `D` (its normal alone when `K` is a multiple of
+    /// `n nᵀ`, else the three world axes) and `K = D K_r Dᵀ`, that is
+    /// `W C Wᵀ` with `W = [J_aᵀ D, J_bᵀ D]` and `C = −[[0, K_r], [K_r, 0]]`.
+    /// By Woodbury, `x ← x − Z (I + C Wᵀ Z)⁻¹ C Wᵀ x` with `Z = A⁻¹ W`:
+    /// two (or six) back-substitutions per pair and a dense system of two
+    /// (or six) unknowns per pair; no inverse of `K` is needed.
+    fn pair_correction(&mut self, c_v: f64, c_q: f64, x: &mut [f64]) -> Result<(), SystemError> {
+        #[cfg(test)]
+        if !self.pair_coupling {
+            return Ok(());
+        }
+        if self.pair_scratch.is_empty() {
+            return Ok(());
+        }
+        let n = self.joints.len();
+        // Per pair: its directions, `K_r` and its first column.
+        let mut blocks: Vec<(Vec<DVec3>, Vec<f64>, usize)> = Vec::with_capacity(self.pair_scratch.len());
+        let mut cols = 0;
+        for p in &self.pair_scratch {
+            let kt = p.stiffness * c_q + p.damping * c_v;
+            let dirs = match p.normal {
+                Some(nrm) => vec![nrm],
+                None => vec![DVec3::X, DVec3::Y, DVec3::Z],
+            };
+            let kr: Vec<f64> = dirs.iter().flat_map(|di| dirs.iter().map(move |dj| di.dot(kt * *dj))).collect();
+            let r = dirs.len();
+            blocks.push((dirs, kr, cols));
+            cols += 2 * r;
+        }
+        // Each column: a unit force along a direction at a pair's point.
+        let mut columns: Vec<(usize, DVec3, DVec3)> = Vec::with_capacity(cols);
+        for (p, (dirs, _, _)) in self.pair_scratch.iter().zip(&blocks) {
+            for (link, point) in [(p.link_a, p.pa), (p.link_b, p.pb)] {
+                columns.extend(dirs.iter().map(|&d| (link, point, d)));
+            }
+        }
+        let mut z = vec![0.0; cols * n];
+        let mut rhs = vec![0.0; n];
+        for (c, &(link, p, e)) in columns.iter().enumerate() {
+            rhs.iter_mut().for_each(|r| *r = 0.0);
+            let f = V6::new(p.cross(e), e);
+            let mut j = Some(link);
+            while let Some(s) = j {
+                rhs[s] = self.rows[s].s.dot(f);
+                j = self.joint_parent(s);
+            }
+            self.resolve(&rhs, &mut z[c * n..(c + 1) * n]);
+        }
+        // Wᵀ y: each column's point velocity along its direction for the
+        // coordinate change y.
+        let mut motion = vec![V6::ZERO; n];
+        let mut w_t = |y: &[f64], out: &mut [f64]| {
+            self.link_motions(y, &mut motion);
+            for (o, &(link, p, e)) in out.iter_mut().zip(&columns) {
+                *o = (motion[link].bot + motion[link].top.cross(p)).dot(e);
+            }
+        };
+        let mut g = vec![0.0; cols * cols]; // g[r * cols + c] = W_rᵀ z_c
+        let mut col_out = vec![0.0; cols];
+        for c in 0..cols {
+            w_t(&z[c * n..(c + 1) * n], &mut col_out);
+            for r in 0..cols {
+                g[r * cols + c] = col_out[r];
+            }
+        }
+        let mut g0 = vec![0.0; cols];
+        w_t(x, &mut g0);
+        // C v per pair: (C v)_a = −K_r v_b, (C v)_b = −K_r v_a.
+        let apply_c = |v: &[f64], out: &mut [f64]| {
+            for (dirs, kr, first) in &blocks {
+                let r = dirs.len();
+                for i in 0..r {
+                    let (mut ya, mut yb) = (0.0, 0.0);
+                    for j in 0..r {
+                        ya -= kr[i * r + j] * v[first + r + j];
+                        yb -= kr[i * r + j] * v[first + j];
+                    }
+                    out[first + i] = ya;
+                    out[first + r + i] = yb;
+                }
+            }
+        };
+        // M = I + C G, column by column; right-hand side C g0.
+        let mut mat = vec![0.0; cols * cols];
+        let mut gc = vec![0.0; cols];
+        let mut cgc = vec![0.0; cols];
+        for c in 0..cols {
+            for r in 0..cols {
+                gc[r] = g[r * cols + c];
+            }
+            apply_c(&gc, &mut cgc);
+            for r in 0..cols {
+                mat[r * cols + c] = cgc[r] + if r == c { 1.0 } else { 0.0 };
+            }
+        }
+        let mut rhs = vec![0.0; cols];
+        apply_c(&g0, &mut rhs);
+        let mut y = vec![0.0; cols];
+        crate::integrate::gauss_solve(cols, &mut mat, &rhs, &mut y)?;
+        for (c, &yc) in y.iter().enumerate() {
+            if yc != 0.0 {
+                for (xi, zi) in x.iter_mut().zip(&z[c * n..(c + 1) * n]) {
+                    *xi -= zi * yc;
+                }
+            }
+        }
         Ok(())
     }
 
