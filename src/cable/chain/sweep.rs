@@ -409,7 +409,7 @@ impl Chain {
     /// for another right-hand side `b`, without the pair correction: the
     /// tip-to-base bias pass alone, then the forward substitution (O(n),
     /// a fraction of a full solve). Overwrites the rows' `u`.
-    fn resolve(&mut self, b: &[f64], x: &mut [f64]) {
+    fn resolve(&mut self, b: &[f64], x: &mut [f64], link: impl FnMut(usize, V6)) {
         let tree = !self.limbs.is_empty();
         if tree {
             self.limb_carry.iter_mut().for_each(|c| c.bias = V6::ZERO);
@@ -446,7 +446,7 @@ impl Chain {
                 bias = V6::ZERO;
             }
         }
-        self.forward_solve(x);
+        self.forward_solve_with(x, link);
     }
 
     /// The sub-joint whose link is the parent of sub-joint `s`'s link
@@ -459,12 +459,17 @@ impl Chain {
         s.checked_sub(1)
     }
 
-    /// The spatial motion of every link for the coordinate change `x`
+    /// The spatial motion of each of `links` for the coordinate change `x`
     /// (`Σ S_j x_j` over the link's ancestors), into `out`.
-    fn link_motions(&self, x: &[f64], out: &mut [V6]) {
-        for s in 0..self.joints.len() {
-            let parent = self.joint_parent(s).map_or(V6::ZERO, |p| out[p]);
-            out[s] = parent + self.rows[s].s * x[s];
+    fn link_motions(&self, x: &[f64], links: &[usize], out: &mut [V6]) {
+        for (o, &l) in out.iter_mut().zip(links) {
+            let mut m = V6::ZERO;
+            let mut j = Some(l);
+            while let Some(s) = j {
+                m += self.rows[s].s * x[s];
+                j = self.joint_parent(s);
+            }
+            *o = m;
         }
     }
 
@@ -508,8 +513,27 @@ impl Chain {
                 columns.extend(dirs.iter().map(|&d| (link, point, d)));
             }
         }
+        // Wᵀ y, each column's point velocity along its direction for a
+        // coordinate change y, from the motions of the pair links.
+        let mut slot = vec![u32::MAX; n];
+        let mut links: Vec<usize> = Vec::new();
+        for &(l, _, _) in &columns {
+            if slot[l] == u32::MAX {
+                slot[l] = links.len() as u32;
+                links.push(l);
+            }
+        }
+        let w_t = |motion: &[V6], out: &mut [f64]| {
+            for (o, &(l, p, e)) in out.iter_mut().zip(&columns) {
+                let m = motion[slot[l] as usize];
+                *o = (m.bot + m.top.cross(p)).dot(e);
+            }
+        };
         let mut z = vec![0.0; cols * n];
         let mut rhs = vec![0.0; n];
+        let mut motion = vec![V6::ZERO; links.len()];
+        let mut g = vec![0.0; cols * cols]; // g[r * cols + c] = W_rᵀ z_c
+        let mut col_out = vec![0.0; cols];
         for (c, &(link, p, e)) in columns.iter().enumerate() {
             rhs.iter_mut().for_each(|r| *r = 0.0);
             let f = V6::new(p.cross(e), e);
@@ -518,27 +542,19 @@ impl Chain {
                 rhs[s] = self.rows[s].s.dot(f);
                 j = self.joint_parent(s);
             }
-            self.resolve(&rhs, &mut z[c * n..(c + 1) * n]);
-        }
-        // Wᵀ y: each column's point velocity along its direction for the
-        // coordinate change y.
-        let mut motion = vec![V6::ZERO; n];
-        let mut w_t = |y: &[f64], out: &mut [f64]| {
-            self.link_motions(y, &mut motion);
-            for (o, &(link, p, e)) in out.iter_mut().zip(&columns) {
-                *o = (motion[link].bot + motion[link].top.cross(p)).dot(e);
-            }
-        };
-        let mut g = vec![0.0; cols * cols]; // g[r * cols + c] = W_rᵀ z_c
-        let mut col_out = vec![0.0; cols];
-        for c in 0..cols {
-            w_t(&z[c * n..(c + 1) * n], &mut col_out);
+            self.resolve(&rhs, &mut z[c * n..(c + 1) * n], |s, m| {
+                if slot[s] != u32::MAX {
+                    motion[slot[s] as usize] = m;
+                }
+            });
+            w_t(&motion, &mut col_out);
             for r in 0..cols {
                 g[r * cols + c] = col_out[r];
             }
         }
         let mut g0 = vec![0.0; cols];
-        w_t(x, &mut g0);
+        self.link_motions(x, &links, &mut motion);
+        w_t(&motion, &mut g0);
         // C v per pair: (C v)_a = −K_r v_b, (C v)_b = −K_r v_a.
         let apply_c = |v: &[f64], out: &mut [f64]| {
             for (dirs, kr, first) in &blocks {
@@ -604,6 +620,13 @@ impl Chain {
 
     /// Base-to-tip half of the articulated-body solve.
     fn forward_solve(&mut self, x: &mut [f64]) {
+        self.forward_solve_with(x, |_, _| {});
+    }
+
+    /// [`Chain::forward_solve`], handing `link(s, motion)` the spatial
+    /// motion of each link (`Σ S_j x_j` over its ancestors) as it is found.
+    #[inline]
+    fn forward_solve_with(&mut self, x: &mut [f64], mut link: impl FnMut(usize, V6)) {
         let mut acc = V6::ZERO;
         let n = self.rows.len();
         let tree = !self.limbs.is_empty();
@@ -630,6 +653,7 @@ impl Chain {
                     let xs = (row.u - row.u_vec.dot(acc)) * row.d;
                     x[s] = xs;
                     acc += row.s * xs;
+                    link(s, acc);
                     s += 1;
                 }
                 k => {
@@ -640,6 +664,8 @@ impl Chain {
                     x[s + 1] = xb.y;
                     x[s + 2] = xb.z;
                     acc += f[0].s * xb.x + f[1].s * xb.y + f[2].s * xb.z;
+                    // (The block's first two links carry nothing.)
+                    link(s + 2, acc);
                     s += 3;
                 }
             }
