@@ -732,6 +732,12 @@ pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, h: f6
                 continue;
             }
             let (fa, fb) = closest_on_segments(gi.a, gi.b, gj.a, gj.b);
+            // A touch at an element's start node is its predecessor's, at
+            // that one's end (one contact per node, not one per element
+            // meeting there).
+            if (fa == 0.0 && gi.element > 0) || (fb == 0.0 && gj.element > 0) {
+                continue;
+            }
             let (pa, pb) = (gi.a.lerp(gi.b, fa), gj.a.lerp(gj.b, fb));
             let d = pa.distance(pb);
             let relative = gi.va.lerp(gi.vb, fa) - gj.va.lerp(gj.vb, fb);
