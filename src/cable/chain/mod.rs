@@ -466,10 +466,12 @@ impl Chain {
     /// Force elements between two points of the chain ([`PairElement`](super::force::PairElement)):
     /// each closes a loop in the chain's tree, and the solve accounts for
     /// the coupling of its two points exactly: after the O(n) sweep, a
-    /// Woodbury correction over the pairs (six O(n) back-substitutions per
-    /// pair and a dense system of six unknowns per pair), so Newton keeps
-    /// its rate however stiff the pair is (docs/architecture.md,
-    /// "Contact").
+    /// Woodbury correction over the pairs (per pair, two O(n)
+    /// back-substitutions and two unknowns of a dense system when its law
+    /// acts along one direction, [`PairWrench::normal`], else six), so
+    /// Newton keeps its rate however stiff the pair is; the cost is
+    /// O(m n) per Newton iteration for m pairs (docs/architecture.md,
+    /// "Contact"; docs/performance.md).
     pub fn pairs(&self) -> &[AttachedPair] {
         &self.pairs
     }
