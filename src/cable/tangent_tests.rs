@@ -69,6 +69,33 @@ fn check_tangent_at(model: &mut RopeModel, q: &[f64], rng: &mut Lcg, c_q: f64) -
     worst
 }
 
+/// The damping tangent check: `(M + c_v C) x = b` for the x the O(n)
+/// solve returns at a configuration perturbed from `q0`, with `C x` from
+/// central differences of the residual in the velocities (the residual is
+/// quadratic in v: exact up to round-off, which a large step keeps
+/// small); the largest residual relative to `b`, for each `c_v`.
+fn damping_tangent_errors(m: &mut RopeModel, rng: &mut Lcg, c_vs: &[f64]) -> Vec<f64> {
+    let n = m.chain.len();
+    let q: Vec<f64> = m.q0.iter().map(|x| x + 0.05 * rng.next()).collect();
+    let zero = vec![0.0; n];
+    c_vs.iter()
+        .map(|&c_v| {
+            let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+            let (mut x, mut r0, mut rx, mut rp, mut rm) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+            m.chain.residual_into(0.0, &q, &zero, &zero, &mut r0).unwrap();
+            m.chain.solve_into(c_v, 0.0, &b, &mut x).unwrap();
+            m.chain.residual_into(0.0, &q, &zero, &x, &mut rx).unwrap();
+            let eps = 1e-2 / x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let vp: Vec<f64> = x.iter().map(|v| eps * v).collect();
+            let vm: Vec<f64> = x.iter().map(|v| -eps * v).collect();
+            m.chain.residual_into(0.0, &q, &vp, &zero, &mut rp).unwrap();
+            m.chain.residual_into(0.0, &q, &vm, &zero, &mut rm).unwrap();
+            let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            (0..n).map(|i| ((rx[i] - r0[i]) + c_v * (rp[i] - rm[i]) / (2.0 * eps) - b[i]).abs() / scale).fold(0.0, f64::max)
+        })
+        .collect()
+}
+
 fn loaded_rope(end: RopeEnd, clamp: bool) -> RopeModel {
     let base = BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO));
     let start = if clamp { RopeStart::Clamped(base) } else { RopeStart::Pinned(base) };
@@ -411,24 +438,7 @@ fn force_element_tangents_match_finite_differences() {
         let err = check_tangent(&mut m, seed, c_q);
         assert!(err < 1e-7, "force element: stiffness tangent residual {err:e} at c_q = {c_q}");
     }
-    let n = m.chain.len();
-    let q: Vec<f64> = m.q0.iter().map(|x| x + 0.05 * rng.next()).collect();
-    let zero = vec![0.0; n];
-    for c_v in [1.0, 1e-2] {
-        let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
-        let (mut x, mut r0, mut rx, mut rp, mut rm) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        m.chain.residual_into(0.0, &q, &zero, &zero, &mut r0).unwrap();
-        m.chain.solve_into(c_v, 0.0, &b, &mut x).unwrap();
-        m.chain.residual_into(0.0, &q, &zero, &x, &mut rx).unwrap();
-        // The residual is quadratic in v: central differences are exact up
-        // to round-off, which a large step keeps small.
-        let eps = 1e-2 / x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let vp: Vec<f64> = x.iter().map(|v| eps * v).collect();
-        let vm: Vec<f64> = x.iter().map(|v| -eps * v).collect();
-        m.chain.residual_into(0.0, &q, &vp, &zero, &mut rp).unwrap();
-        m.chain.residual_into(0.0, &q, &vm, &zero, &mut rm).unwrap();
-        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let err = (0..n).map(|i| ((rx[i] - r0[i]) + c_v * (rp[i] - rm[i]) / (2.0 * eps) - b[i]).abs() / scale).fold(0.0, f64::max);
+    for (err, c_v) in damping_tangent_errors(&mut m, &mut rng, &[1.0, 1e-2]).into_iter().zip([1.0, 1e-2]) {
         assert!(err < 1e-7, "force element: damping tangent residual {err:e} at c_v = {c_v}");
     }
 }
@@ -483,7 +493,8 @@ fn friction_contact_tangents_match_finite_differences() {
 /// is the exact tangent, measured against the residual's finite
 /// differences as `check_tangent` does, on the serial chain (two points
 /// far apart along the rope, and a point against the payload) and on the
-/// tree (a point of one limb against a point of another). Without the
+/// tree (a point of one limb against a point of another), and the
+/// damping tangent of a damped pair likewise. Without the
 /// correction (each point's own stiffness only) the same check fails by
 /// orders of magnitude: the coupling is the loop.
 #[test]
@@ -530,6 +541,20 @@ fn pair_element_tangents_match_finite_differences() {
         let err = check_tangent(&mut m, seed, c_q);
         eprintln!("serial pairs with a contact c_q={c_q}: {err:e}");
         assert!(err < 1e-6, "pair elements with a contact: tangent residual {err:e} at c_q = {c_q}");
+    }
+    // The damping tangent of a damped pair (far apart on the rope) with
+    // the coupling.
+    let mut d = loaded_rope(payload(), true);
+    d.chain.pairs_mut().push(AttachedPair {
+        link_a: e1,
+        point_a: DVec3::new(0.05, 0.01, 0.0),
+        link_b: e4,
+        point_b: DVec3::ZERO,
+        element: Arc::new(PairSpring { stiffness: 0.0, damping: 3e3 }),
+    });
+    for (err, c_v) in damping_tangent_errors(&mut d, &mut Lcg(26), &[1.0, 1e-2]).into_iter().zip([1.0, 1e-2]) {
+        eprintln!("damped pair c_v={c_v}: {err:e}");
+        assert!(err < 1e-7, "pair element: damping tangent residual {err:e} at c_v = {c_v}");
     }
     // The same solve without the loop coupling (each point's own
     // stiffness only) is far off.
