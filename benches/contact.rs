@@ -51,7 +51,12 @@ path = [[{x0}, 0.011, 0.0], [{x1}, 0.011, 0.0]]
         x0 = -0.5 * length,
         x1 = 0.5 * length,
     );
-    let sc = scenario::parse(&src, "contact_bench.toml").unwrap();
+    settled(&src, "contact_bench.toml")
+}
+
+/// The scenario `src` (named `name`) run for 1 s (60 frame steps).
+fn settled(src: &str, name: &str) -> World {
+    let sc = scenario::parse(src, name).unwrap();
     let mut w = World::new(sc).unwrap();
     for _ in 0..60 {
         w.step().unwrap();
@@ -110,11 +115,7 @@ path = [{points}]
         half = length + 10.0,
         points = points.join(", "),
     );
-    let sc = scenario::parse(&src, "crossing_bench.toml").unwrap();
-    let mut w = World::new(sc).unwrap();
-    for _ in 0..60 {
-        w.step().unwrap();
-    }
+    let w = settled(&src, "crossing_bench.toml");
     // The scene is what it says: a pair contact at each crossing (a
     // crossing holds up to four where it falls near a node: two elements
     // on each side).

@@ -751,9 +751,9 @@ impl RopeView<'_> {
         let other = ch
             .pairs()
             .iter()
-            .zip(ch.pair_wrenches(t))
+            .zip(ch.pair_points())
             .filter(|(p, _)| (first..last).contains(&p.link_a) != (first..last).contains(&p.link_b))
-            .filter_map(|(p, (a, b, _))| p.element.contact_force(t, &a, &b));
+            .filter_map(|(p, (a, b))| p.element.contact_force(t, &a, &b));
         own.sum::<f64>() + other.sum::<f64>()
     }
 

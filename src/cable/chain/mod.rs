@@ -486,14 +486,14 @@ impl Chain {
     /// in order) and the force the element applies at time `t` (s), at the
     /// last kinematics pass's poses.
     pub fn pair_wrenches(&self, t: f64) -> Vec<(PointState, PointState, PairWrench)> {
-        self.pairs
-            .iter()
-            .map(|p| {
-                let a = point_state(&self.poses[p.link_a], self.origin, p.point_a).0;
-                let b = point_state(&self.poses[p.link_b], self.origin, p.point_b).0;
-                (a, b, p.element.wrench(t, &a, &b))
-            })
-            .collect()
+        self.pairs.iter().zip(self.pair_points()).map(|(p, (a, b))| (a, b, p.element.wrench(t, &a, &b))).collect()
+    }
+
+    /// The world states of each pair element's two points ([`Chain::pairs`],
+    /// in order) at the last kinematics pass's poses.
+    pub fn pair_points(&self) -> impl Iterator<Item = (PointState, PointState)> + '_ {
+        let at = |link: usize, local: DVec3| point_state(&self.poses[link], self.origin, local).0;
+        self.pairs.iter().map(move |p| (at(p.link_a, p.point_a), at(p.link_b, p.point_b)))
     }
 
     /// Objective bending–torsion laws replacing the per-angle springs of

@@ -2,7 +2,7 @@
 //! articulated-body elimination, and the forward substitution.
 
 use super::*;
-use crate::cable::force::{point_to_spatial, ForceElement, PointState};
+use crate::cable::force::{point_to_spatial, ForceElement, PointState, PointWrench};
 use crate::cable::spatial::{skew, M6, V6};
 use crate::integrate::SystemError;
 use glam::{DMat3, DQuat, DVec3};
@@ -291,14 +291,10 @@ impl Chain {
             let (at_a, pa) = point_state(&self.poses[pr.link_a], self.origin, pr.point_a);
             let (at_b, pb) = point_state(&self.poses[pr.link_b], self.origin, pr.point_b);
             let w = pr.element.wrench(t, &at_a, &at_b);
-            for (link, p, f) in [(pr.link_a, pa, w.force), (pr.link_b, pb, -w.force)] {
-                let ls = &mut self.links[self.link_slot[link] as usize];
-                let px = skew(p);
-                let (k, c) = &mut self.anchor_blocks[ls.anchor as usize];
-                k.add_scaled(&point_to_spatial(&M6 { d: w.stiffness, ..M6::ZERO }, px), 1.0);
-                c.add_scaled(&point_to_spatial(&M6 { d: w.damping, ..M6::ZERO }, px), 1.0);
-                ls.f += V6::new(p.cross(f), f);
-                ls.add_point_load_tangent(f, p);
+            let (stiffness, damping) = (M6 { d: w.stiffness, ..M6::ZERO }, M6 { d: w.damping, ..M6::ZERO });
+            for (link, p, force) in [(pr.link_a, pa, w.force), (pr.link_b, pb, -w.force)] {
+                let point = PointWrench { force, moment: DVec3::ZERO, stiffness, damping };
+                add_point_wrench(&mut self.links[self.link_slot[link] as usize], &mut self.anchor_blocks, p, &point);
             }
             self.pair_scratch.push(PairScratch { link_a: pr.link_a, link_b: pr.link_b, pa, pb, stiffness: w.stiffness, damping: w.damping, normal: w.normal });
         }
@@ -459,17 +455,16 @@ impl Chain {
         s.checked_sub(1)
     }
 
+    /// Sub-joint `s` and the sub-joints its link hangs from, to the base.
+    fn ancestors(&self, s: usize) -> impl Iterator<Item = usize> + '_ {
+        std::iter::successors(Some(s), |&j| self.joint_parent(j))
+    }
+
     /// The spatial motion of each of `links` for the coordinate change `x`
     /// (`Σ S_j x_j` over the link's ancestors), into `out`.
     fn link_motions(&self, x: &[f64], links: &[usize], out: &mut [V6]) {
         for (o, &l) in out.iter_mut().zip(links) {
-            let mut m = V6::ZERO;
-            let mut j = Some(l);
-            while let Some(s) = j {
-                m += self.rows[s].s * x[s];
-                j = self.joint_parent(s);
-            }
-            *o = m;
+            *o = self.ancestors(l).fold(V6::ZERO, |m, s| m + self.rows[s].s * x[s]);
         }
     }
 
@@ -537,10 +532,8 @@ impl Chain {
         for (c, &(link, p, e)) in columns.iter().enumerate() {
             rhs.iter_mut().for_each(|r| *r = 0.0);
             let f = V6::new(p.cross(e), e);
-            let mut j = Some(link);
-            while let Some(s) = j {
+            for s in self.ancestors(link) {
                 rhs[s] = self.rows[s].s.dot(f);
-                j = self.joint_parent(s);
             }
             self.resolve(&rhs, &mut z[c * n..(c + 1) * n], |s, m| {
                 if slot[s] != u32::MAX {
@@ -842,7 +835,14 @@ pub(super) fn apply_force_element(
     element: &dyn ForceElement,
 ) {
     let (at, p) = point_state(ps, origin, local_point);
-    let w = element.wrench(t, &at);
+    add_point_wrench(ls, blocks, p, &element.wrench(t, &at));
+}
+
+/// Adds the wrench `w` at the point `p` (relative to the chain's origin)
+/// to the link's load, the moment-arm tangent to the link's load tangent,
+/// and its stiffness and damping (moved to the spatial frame) to the
+/// link's implicit blocks.
+fn add_point_wrench(ls: &mut LinkScratch, blocks: &mut [(M6, M6)], p: DVec3, w: &PointWrench) {
     let px = skew(p);
     let (k, c) = &mut blocks[ls.anchor as usize];
     k.add_scaled(&point_to_spatial(&w.stiffness, px), 1.0);
