@@ -111,10 +111,11 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 27] = [
+const COMPARED: [&str; 29] = [
     "axial_bounce",
     "bend_45",
     "boom_hoist",
+    "cable_impact",
     "cantilever_end_moment",
     "cantilever_tip_load",
     "capstan_friction",
@@ -132,6 +133,7 @@ const COMPARED: [&str; 27] = [
     "perf_swing_1000",
     "rope_crossing",
     "rope_on_ground",
+    "rope_on_rope",
     "rope_on_slope",
     "rope_over_cylinder",
     "spin_up",
@@ -162,6 +164,7 @@ same_rows!(
     axial_bounce,
     bend_45,
     boom_hoist,
+    cable_impact,
     capstan_friction,
     cantilever_end_moment,
     cantilever_tip_load,
@@ -179,6 +182,7 @@ same_rows!(
     perf_swing_1000,
     rope_crossing,
     rope_on_ground,
+    rope_on_rope,
     rope_on_slope,
     rope_over_cylinder,
     spin_up,

@@ -5,11 +5,9 @@
 //! through itself.
 #![cfg(feature = "sim")]
 
-use bevy_rapier_cable::scenario;
-
 #[path = "common/scenario_run.rs"]
 mod scenario_run;
-use scenario_run::run_scenario;
+use scenario_run::{landing, run_shipped_variant};
 
 /// The shipped `rope_crossing.toml` (a 20 mm steel rope on the ground,
 /// moulded into a path that comes back across its own first straight)
@@ -18,11 +16,7 @@ use scenario_run::run_scenario;
 /// Rows: t, total contact force with the ground (N), lower y, upper y (m),
 /// every frame for 2 s.
 fn crossing(height: f64) -> Vec<Vec<f64>> {
-    let shipped = std::fs::read_to_string("assets/scenarios/rope_crossing.toml").unwrap();
-    let source = shipped.replace("[0.0, 0.2, 1.5], [0.0, 0.2, -1.5]", &format!("[0.0, {height}, 1.5], [0.0, {height}, -1.5]"));
-    assert!(height == 0.2 || source != shipped, "the path line of rope_crossing.toml moved: update this test");
-    let sc = scenario::parse(&source, "rope_crossing.toml").unwrap_or_else(|e| panic!("{e}"));
-    run_scenario(sc).1
+    run_shipped_variant("rope_crossing", "[0.0, 0.2, 1.5], [0.0, 0.2, -1.5]", &format!("[0.0, {height}, 1.5], [0.0, {height}, -1.5]"))
 }
 
 /// The rope's upper pass, let go 0.2 m above the ground, lands on its own
@@ -38,11 +32,11 @@ fn a_rope_crossing_itself_rests_on_itself() {
     let diameter = 0.020;
     let weight = 10.52 * 1.6 * 9.81;
     let gap = |r: &Vec<f64>| r[3] - r[2];
-    let closest = rows.iter().map(gap).fold(f64::INFINITY, f64::min);
+    let (closest, last_gap, _) = landing(&rows);
     let last = rows.last().unwrap();
     eprintln!("crossing: final gap {:.6} m, closest {closest:.6} m, ground {:.3} N (weight {weight:.3})", gap(last), last[1]);
     assert!(closest > diameter - 2e-4, "the upper pass went into the lower one: centrelines {closest} m apart");
-    assert!((gap(last) - diameter).abs() < 2e-4, "resting gap {} m", gap(last));
+    assert!((last_gap - diameter).abs() < 2e-4, "resting gap {} m", last_gap);
     assert!(((last[1] - weight) / weight).abs() < 1e-6, "ground force {} N against the weight {weight} N", last[1]);
 }
 
@@ -54,12 +48,9 @@ fn a_rope_crossing_itself_rests_on_itself() {
 fn a_rope_dropped_on_itself_at_speed_does_not_pass_through() {
     let rows = crossing(1.2);
     let diameter = 0.020;
-    let gap = |r: &Vec<f64>| r[3] - r[2];
-    let closest = rows.iter().map(gap).fold(f64::INFINITY, f64::min);
-    let last = rows.last().unwrap();
-    let speed = rows.windows(2).map(|w| (w[0][3] - w[1][3]) / (w[1][0] - w[0][0])).fold(0.0f64, f64::max);
-    eprintln!("drop: closest {closest:.6} m, final gap {:.6} m, fastest fall {speed:.2} m/s", gap(last));
+    let (closest, last_gap, speed) = landing(&rows);
+    eprintln!("drop: closest {closest:.6} m, final gap {:.6} m, fastest fall {speed:.2} m/s", last_gap);
     assert!(speed > 4.0, "the upper pass should strike fast: {speed} m/s");
     assert!(closest > diameter - 1e-3, "the upper pass went through the lower one: centrelines {closest} m apart");
-    assert!((gap(last) - diameter).abs() < 2e-4, "resting gap {} m", gap(last));
+    assert!((last_gap - diameter).abs() < 2e-4, "resting gap {} m", last_gap);
 }

@@ -1,7 +1,7 @@
 //! [`Cable`]: a rope model with its integrator state, stepped in time, with
 //! the queries users read (node positions, tension, moments, energy).
 
-use super::chain::{LinkLoad, SpringLaw, StaticError, IN_CHAIN};
+use super::chain::{Chain, Forest, ForestPair, LinkLoad, SpringLaw, StaticError, IN_CHAIN};
 use super::force::{AttachedForce, ForceElement, PointState, PointWrench};
 use super::rope::{RopeLayout, RopeModel, ELEMENT_DOFS};
 use super::spatial::V6;
@@ -155,6 +155,80 @@ impl Cable {
         }
         if !newton_converged || self.model.layout.free_start {
             self.refresh();
+        }
+        Ok(stats)
+    }
+
+    /// Advances several cables by `h` seconds as one system, coupled by
+    /// `pairs` (pair elements between points of different cables, or of
+    /// one: [`ForestPair`]'s `chain_a`/`chain_b` index `cables`): a rope of
+    /// one cable touching a rope of another. Each cable keeps its own O(n)
+    /// solve; the pairs' coupling is one loop correction over all of them
+    /// ([`Forest`]). The cables must be at the same time (to round-off;
+    /// they end at the first one's time plus `h`); the step uses
+    /// the first cable's scheme and Newton settings. On error every cable
+    /// is left at the start of the step (as [`Cable::step`] leaves one).
+    /// With one cable and no pairs this is [`Cable::step`].
+    pub fn step_together(cables: &mut [&mut Cable], pairs: Vec<ForestPair>, h: f64) -> Result<StepStats, CableError> {
+        let Some(first) = cables.first() else {
+            return Ok(StepStats::default());
+        };
+        if cables.len() == 1 && pairs.is_empty() {
+            return cables[0].step(h);
+        }
+        let t = first.state.t;
+        // (Cables stepped apart in different passes before may differ in
+        // the last bits of their time.)
+        if let Some(c) = cables.iter().find(|c| (c.state.t - t).abs() > 1e-9 * h.max(t.abs())) {
+            return Err(CableError::Diverged { time: t, reason: format!("cables stepped together at different times ({t} s and {} s)", c.state.t) });
+        }
+        let mut integrator = Integrator::joint(&first.integrator, cables.iter().map(|c| c.integrator.split()));
+        let join = |f: fn(&State) -> &Vec<f64>| cables.iter().flat_map(|c| f(&c.state).iter().copied()).collect::<Vec<f64>>();
+        let mut state = State { t, q: join(|s| &s.q), v: join(|s| &s.v), a: join(|s| &s.a), a_hat: join(|s| &s.a_hat) };
+        let saved: Vec<State> = cables.iter().map(|c| c.state.clone()).collect();
+        let result = {
+            let chains: Vec<&mut Chain> = cables.iter_mut().map(|c| &mut c.model.chain).collect();
+            Forest::new(chains, pairs)
+                .map_err(|source| CableError::Integrate(IntegrateError::System { t, source }))
+                .and_then(|mut forest| integrator.step(&mut forest, &mut state, h).map_err(CableError::from))
+        };
+        let restore = |cables: &mut [&mut Cable]| {
+            for (c, s) in cables.iter_mut().zip(&saved) {
+                c.state = s.clone();
+                c.refresh();
+            }
+        };
+        let stats = match result {
+            Ok(stats) => stats,
+            Err(e) => {
+                restore(cables);
+                return Err(e);
+            }
+        };
+        let mut at = 0;
+        for c in cables.iter_mut() {
+            let n = c.state.q.len();
+            let st = &mut c.state;
+            st.t = state.t;
+            st.q.copy_from_slice(&state.q[at..at + n]);
+            st.v.copy_from_slice(&state.v[at..at + n]);
+            st.a.copy_from_slice(&state.a[at..at + n]);
+            st.a_hat.copy_from_slice(&state.a_hat[at..at + n]);
+            at += n;
+        }
+        if let Some(e) = cables.iter().find_map(|c| c.check_sanity().err()) {
+            restore(cables);
+            return Err(e);
+        }
+        for c in cables.iter_mut() {
+            c.integrator.take_split(&integrator);
+            c.last_stats = stats;
+            c.total_stats += stats;
+            c.steps += 1;
+            if c.model.layout.free_start {
+                c.rechart_free_start()?;
+            }
+            c.refresh();
         }
         Ok(stats)
     }
@@ -734,8 +808,9 @@ impl RopeView<'_> {
     /// The sum of the normal forces of the contacts on this rope
     /// ([`ForceElement::contact_force`]: the [`SphereContact`](super::SphereContact)s
     /// among its force elements, and the [`PairContact`](super::PairContact)s
-    /// with another rope of the cable) now, N. Its contacts with itself
-    /// are internal and not counted.
+    /// with another rope of the cable or of another cable stepped with it,
+    /// [`Cable::step_together`]) now, N. Its contacts with itself are
+    /// internal and not counted.
     pub fn contact_force(&self) -> f64 {
         let ch = &self.cable.model.chain;
         let (first, last) = (self.layout.dof(0, 0), self.layout.dof(self.layout.elements, 0));
@@ -754,7 +829,9 @@ impl RopeView<'_> {
             .zip(ch.pair_points())
             .filter(|(p, _)| (first..last).contains(&p.link_a) != (first..last).contains(&p.link_b))
             .filter_map(|(p, (a, b))| p.element.contact_force(t, &a, &b));
-        own.sum::<f64>() + other.sum::<f64>()
+        // Contacts with another cable's ropes (a joint step's).
+        let cables = ch.external_contacts().filter(|(l, _)| (first..last).contains(l)).map(|(_, f)| f);
+        own.sum::<f64>() + other.sum::<f64>() + cables.sum::<f64>()
     }
 
     /// Axial tension (N) at arc length `s` (m, from the user's start): the

@@ -107,8 +107,11 @@ impl ImpactLaw {
     }
 
     /// `(F_n, ∂F_n/∂δ, ∂F_n/∂δ̇)` at penetration `depth` (m, > 0 inside)
-    /// and its rate `rate` (m/s, > 0 approaching): N, N/m, N·s/m. Zero
-    /// outside, and where the clamp at zero holds.
+    /// and its rate `rate` (m/s, > 0 approaching): N, N/m, N·s/m. All zero
+    /// outside; where the clamp at zero holds (inside, separating faster
+    /// than the spring pushes), no force but the unclamped law's tangents
+    /// (its stiffness no less than zero), which steer Newton into the
+    /// contact it would enter.
     pub fn force(&self, depth: f64, rate: f64) -> (f64, f64, f64) {
         if depth <= 0.0 {
             return (0.0, 0.0, 0.0);
@@ -124,10 +127,17 @@ impl ImpactLaw {
             (self.max_damping * x * x * (3.0 - 2.0 * x), self.max_damping * 6.0 * x * (1.0 - x) / self.damping_depth)
         };
         let f = spring + c * rate;
+        let k_t = spring_rate + dc * rate;
         if f <= 0.0 {
-            return (0.0, 0.0, 0.0);
+            // Separating faster than the damping lets the spring push: no
+            // force (no adhesion), but the unclamped law's tangents, so
+            // that Newton sees the contact it would enter (with none, a
+            // contact bouncing off inside a step flipped between
+            // thousands of newtons and nothing from one iterate to the
+            // next; the tangent only steers Newton, the residual is exact).
+            return (0.0, k_t.max(0.0), c);
         }
-        (f, spring_rate + dc * rate, c)
+        (f, k_t, c)
     }
 
     /// Energy stored in the spring part at penetration `depth` (m):
@@ -388,10 +398,9 @@ impl PairElement for PairContact {
     fn wrench(&self, _t: f64, a: &PointState, b: &PointState) -> PairWrench {
         let (depth, rate) = self.depth(a, b);
         let (f, k, c) = self.law.force(depth, rate);
-        if f == 0.0 {
-            return PairWrench::default();
-        }
         let nn = outer3(self.normal, self.normal);
+        // (At zero force, inside and separating: the tangents alone, see
+        // `ImpactLaw::force`.)
         PairWrench { force: self.normal * f, stiffness: nn * k, damping: nn * c, normal: Some(self.normal) }
     }
 
@@ -409,11 +418,16 @@ impl ForceElement for SphereContact {
     fn wrench(&self, t: f64, at: &PointState) -> PointWrench {
         let (depth, rate) = self.depth(t, at);
         let (f, k, c) = self.law.force(depth, rate);
-        if f == 0.0 {
-            return PointWrench::default();
-        }
         let n = self.normal;
         let nn = outer3(n, n);
+        if f == 0.0 {
+            // Outside, or inside and separating (the tangents alone, see
+            // `ImpactLaw::force`); no friction without a normal force.
+            let mut w = PointWrench::default();
+            w.stiffness.d = nn * k;
+            w.damping.d = nn * c;
+            return w;
+        }
         let mut w = PointWrench { force: n * f, ..Default::default() };
         // f = F_n(δ, δ̇) n with δ = r − (p − p₀)·n, δ̇ = −v·n:
         // −∂f/∂p = ∂F_n/∂δ n nᵀ, −∂f/∂v = ∂F_n/∂δ̇ n nᵀ.

@@ -151,7 +151,7 @@ pub(crate) fn point_to_spatial(k: &M6, px: DMat3) -> M6 {
 /// What a [`PairElement`] applies between its two points, world frame: a
 /// force on the first point (the second gets the opposite), with its
 /// tangents with respect to the points' relative motion.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairWrench {
     /// Force on the first point, N (the second point gets `−force`).
     pub force: DVec3,
@@ -162,18 +162,28 @@ pub struct PairWrench {
     /// The one direction (unit) the force and both tangents act along
     /// (`stiffness` and `damping` multiples of `n nᵀ`: a frictionless
     /// contact), if any: the solve then couples the two points along it
-    /// alone (two back-substitutions per pair instead of six).
+    /// alone (one back-substitution per chain the pair touches instead of
+    /// three).
     pub normal: Option<DVec3>,
+}
+
+impl Default for PairWrench {
+    /// No force, no stiffness, no damping (glam's `DMat3::default()` is
+    /// the identity: a derived default gave an untouched contact 1 N/m and
+    /// 1 N·s/m).
+    fn default() -> Self {
+        PairWrench { force: DVec3::ZERO, stiffness: DMat3::ZERO, damping: DMat3::ZERO, normal: None }
+    }
 }
 
 /// A force law between two material points of a chain (on two links, or
 /// twice the same link), evaluated at every Newton iteration with its
 /// tangents: a contact of a rope with itself or with another rope of the
 /// same cable, a spring between two links. The two points are anywhere in
-/// the chain's tree, so the law closes a loop; the chain's solve accounts
-/// for that coupling exactly (a small dense correction over the pairs,
-/// see [`Chain::pairs`](super::chain::Chain::pairs)), not only for each
-/// point's own stiffness.
+/// the chain's tree (or on two chains of a
+/// [`Forest`](super::chain::Forest)), so the law closes a loop; the solve
+/// adds its stiffness and damping exactly (a small dense correction over
+/// the pairs, see [`Chain::pairs`](super::chain::Chain::pairs)).
 pub trait PairElement: Send + Sync {
     /// The force at time `t` (s) with the points at `a` and `b`.
     fn wrench(&self, t: f64, a: &PointState, b: &PointState) -> PairWrench;

@@ -495,8 +495,8 @@ fn friction_contact_tangents_match_finite_differences() {
 /// far apart along the rope, and a point against the payload) and on the
 /// tree (a point of one limb against a point of another), and the
 /// damping tangent of a damped pair likewise. Without the
-/// correction (each point's own stiffness only) the same check fails by
-/// orders of magnitude: the coupling is the loop.
+/// correction (the sweep has the pairs' forces, not their stiffness) the
+/// same check fails by orders of magnitude.
 #[test]
 fn pair_element_tangents_match_finite_differences() {
     let spring = |k: f64| Arc::new(PairSpring { stiffness: k, damping: 0.0 });
@@ -556,8 +556,8 @@ fn pair_element_tangents_match_finite_differences() {
         eprintln!("damped pair c_v={c_v}: {err:e}");
         assert!(err < 1e-7, "pair element: damping tangent residual {err:e} at c_v = {c_v}");
     }
-    // The same solve without the loop coupling (each point's own
-    // stiffness only) is far off.
+    // The same solve without the correction (no pair stiffness) is far
+    // off.
     m.chain.pair_coupling = false;
     let err = check_tangent(&mut m, 21, 1.0);
     m.chain.pair_coupling = true;
@@ -589,4 +589,185 @@ fn pair_element_tangents_match_finite_differences() {
         eprintln!("tree pairs c_q={c_q}: {err:e}");
         assert!(err < 1e-6, "pair elements (tree): tangent residual {err:e} at c_q = {c_q}");
     }
+}
+
+/// [`check_tangent_at`] for any system (a forest of chains): `(M + c_q
+/// K_t) x = b` for the x its solve returns, `M x` and `K_t x` measured
+/// from the residual alone.
+fn check_system_tangent(sys: &mut dyn crate::integrate::SecondOrderSystem, q: &[f64], rng: &mut Lcg, c_q: f64) -> f64 {
+    let n = sys.dof();
+    let zero = vec![0.0; n];
+    let (mut r0, mut rx, mut rp, mut rm) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut worst: f64 = 0.0;
+    for _ in 0..3 {
+        let b: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let mut x = vec![0.0; n];
+        sys.residual(0.0, q, &zero, &zero, &mut r0).unwrap();
+        sys.solve_tangent(0.0, q, &zero, &zero, 0.0, c_q, &b, &mut x).unwrap();
+        sys.residual(0.0, q, &zero, &x, &mut rx).unwrap();
+        let eps = 1e-5 / x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let qp: Vec<f64> = q.iter().zip(&x).map(|(a, b)| a + eps * b).collect();
+        let qm: Vec<f64> = q.iter().zip(&x).map(|(a, b)| a - eps * b).collect();
+        sys.residual(0.0, &qp, &zero, &zero, &mut rp).unwrap();
+        sys.residual(0.0, &qm, &zero, &zero, &mut rm).unwrap();
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..n {
+            worst = worst.max(((rx[i] - r0[i]) + c_q * (rp[i] - rm[i]) / (2.0 * eps) - b[i]).abs() / scale);
+        }
+    }
+    worst
+}
+
+/// Two separate chains (a pinned rope with a payload, and a free tail
+/// hanging from another point) coupled by pair elements in a [`Forest`]:
+/// springs and a pressed contact between them, and a pair within the
+/// first. The forest's tangent is the derivative of its residual; without
+/// pairs its residual is each chain's own, to the bit.
+#[test]
+fn forest_pair_tangents_match_finite_differences() {
+    use crate::integrate::SecondOrderSystem;
+    let mut a = loaded_rope(payload(), true);
+    let mut b = tail(BaseMotion::Fixed(BaseState::fixed(DMat3::from_rotation_y(0.3), DVec3::new(0.2, 0.1, 0.15))));
+    // Per-angle springs (as the tree check): the objective rotation
+    // springs' own tangent is not what this checks.
+    b.chain.rotation_springs_mut().clear();
+    let mut rng = Lcg(41);
+    let qa: Vec<f64> = a.q0.iter().map(|x| x + 0.05 * rng.next()).collect();
+    let qb: Vec<f64> = b.q0.iter().map(|x| x + 0.05 * rng.next()).collect();
+    let q: Vec<f64> = qa.iter().chain(&qb).copied().collect();
+    let (na, n) = (qa.len(), q.len());
+    // No pairs: each chain's residual.
+    let zero = vec![0.0; n];
+    let (mut r, mut ra, mut rb) = (vec![0.0; n], vec![0.0; na], vec![0.0; n - na]);
+    a.chain.residual_into(0.0, &qa, &zero[..na], &zero[..na], &mut ra).unwrap();
+    b.chain.residual_into(0.0, &qb, &zero[na..], &zero[na..], &mut rb).unwrap();
+    Forest::new(vec![&mut a.chain, &mut b.chain], Vec::new()).unwrap().residual(0.0, &q, &zero, &zero, &mut r).unwrap();
+    assert_eq!(r, [ra, rb].concat());
+    let (e1, e3, e4) = (a.layout.element_link(1), a.layout.element_link(3), a.layout.element_link(4));
+    let (f0, f2) = (b.layout.element_link(0), b.layout.element_link(2));
+    a.chain.pairs_mut().push(AttachedPair {
+        link_a: e1,
+        point_a: DVec3::new(0.05, 0.01, 0.0),
+        link_b: e4,
+        point_b: DVec3::new(-0.02, 0.0, 0.03),
+        element: Arc::new(PairSpring { stiffness: 5e4, damping: 0.0 }),
+    });
+    let normal = DVec3::new(0.0, 0.6, 0.8);
+    let law = ImpactLaw::new(3e4, 1.5, 0.0, 1e-3).unwrap();
+    let pairs = vec![
+        ForestPair {
+            chain_a: 0,
+            link_a: e3,
+            point_a: DVec3::new(0.02, 0.0, 0.0),
+            chain_b: 1,
+            link_b: f2,
+            point_b: DVec3::new(0.0, 0.01, 0.0),
+            element: Arc::new(PairSpring { stiffness: 2e4, damping: 0.0 }),
+        },
+        ForestPair {
+            chain_a: 1,
+            link_a: f0,
+            point_a: DVec3::ZERO,
+            chain_b: 0,
+            link_b: e1,
+            point_b: DVec3::ZERO,
+            // Pressed at every configuration the check visits.
+            element: Arc::new(PairContact { normal, radius: 3.0, law }),
+        },
+    ];
+    let mut forest = Forest::new(vec![&mut a.chain, &mut b.chain], pairs).unwrap();
+    for (seed, c_q) in [(42, 1.0), (43, 1e-2), (44, 1e-4)] {
+        let err = check_system_tangent(&mut forest, &q, &mut Lcg(seed), c_q);
+        eprintln!("forest pairs c_q={c_q}: {err:e}");
+        assert!(err < 1e-6, "forest: tangent residual {err:e} at c_q = {c_q}");
+    }
+    // Each chain solved alone (its own pairs and its points' own
+    // stiffness, no coupling across): the forest's tangent is far off.
+    let bvec: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+    forest.residual(0.0, &q, &zero, &zero, &mut r).unwrap();
+    let mut y = vec![0.0; n];
+    {
+        let (ya, yb) = y.split_at_mut(na);
+        forest.chains[0].solve_into(0.0, 1.0, &bvec[..na], ya).unwrap();
+        forest.chains[1].solve_into(0.0, 1.0, &bvec[na..], yb).unwrap();
+    }
+    let (mut ry, mut rp, mut rm) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    forest.residual(0.0, &q, &zero, &y, &mut ry).unwrap();
+    let eps = 1e-5 / y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let qp: Vec<f64> = q.iter().zip(&y).map(|(a, b)| a + eps * b).collect();
+    let qm: Vec<f64> = q.iter().zip(&y).map(|(a, b)| a - eps * b).collect();
+    forest.residual(0.0, &qp, &zero, &zero, &mut rp).unwrap();
+    forest.residual(0.0, &qm, &zero, &zero, &mut rm).unwrap();
+    let scale = bvec.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let err = (0..n).map(|i| ((ry[i] - r[i]) + (rp[i] - rm[i]) / (2.0 * eps) - bvec[i]).abs() / scale).fold(0.0, f64::max);
+    eprintln!("forest without the cross coupling: {err:e}");
+    assert!(err > 1e-2, "the cross coupling should matter: {err:e}");
+}
+
+/// Two cables stepped together with no pair between them move as each
+/// does alone (to the Newton tolerance: the joint step's predictor does
+/// not extrapolate), and with a stiff spring between them the joint step
+/// converges.
+#[test]
+fn cables_stepped_together() {
+    use crate::integrate::{Scheme, Substeps};
+    let make = || {
+        let a = loaded_rope(payload(), true);
+        let mut b = tail(BaseMotion::Fixed(BaseState::fixed(DMat3::from_rotation_y(0.3), DVec3::new(0.2, 0.1, 0.15))));
+        b.chain.rotation_springs_mut().clear();
+        // The same split for both (a joint step splits both cables
+        // alike; the payload's rope needs 16 sub-steps, the tail alone 1).
+        let mut a = Cable::new(a, Scheme::default()).unwrap();
+        let mut b = Cable::new(b, Scheme::default()).unwrap();
+        a.integrator.substeps = Substeps::Fixed(16);
+        b.integrator.substeps = Substeps::Fixed(16);
+        (a, b)
+    };
+    let (mut a, mut b) = make();
+    let (mut a2, mut b2) = make();
+    let h = 1.0 / 60.0;
+    let diff = |x: &Cable, y: &Cable| x.nodes().iter().zip(y.nodes()).map(|(p, q)| p.distance(q)).fold(0.0, f64::max);
+    // (Ten steps: later, the joint Newton needs a finer split than one of
+    // the cables alone at some step, and the two then differ by the
+    // integration error of that split.)
+    for _ in 0..10 {
+        a.step(h).unwrap();
+        b.step(h).unwrap();
+        Cable::step_together(&mut [&mut a2, &mut b2], Vec::new(), h).unwrap();
+    }
+    eprintln!("together vs alone: {:e} {:e}", diff(&a, &a2), diff(&b, &b2));
+    assert!(diff(&a, &a2) < 1e-8 && diff(&b, &b2) < 1e-8);
+    // A pair within one cable, as the chain's own pair element or as a
+    // forest pair of that chain with itself (through the external points
+    // and the forest's loop correction): the same motion.
+    let (e1, e4) = (a.model.layout.element_link(1), a.model.layout.element_link(4));
+    let spring = Arc::new(PairSpring { stiffness: 100.0, damping: 2.0 });
+    let (mut own, _) = make();
+    let (mut forest, _) = make();
+    own.model.chain.pairs_mut().push(AttachedPair { link_a: e1, point_a: DVec3::ZERO, link_b: e4, point_b: DVec3::ZERO, element: spring.clone() });
+    let pair = ForestPair { chain_a: 0, link_a: e1, point_a: DVec3::ZERO, chain_b: 0, link_b: e4, point_b: DVec3::ZERO, element: spring };
+    for _ in 0..10 {
+        own.step(h).unwrap();
+        Cable::step_together(&mut [&mut forest], vec![pair.clone()], h).unwrap();
+    }
+    eprintln!("own pair vs forest pair: {:e}", diff(&own, &forest));
+    assert!(diff(&own, &forest) < 1e-8, "{:e}", diff(&own, &forest));
+    // A spring between the two cables: the pair's reaction reaches both.
+    let (e3, f2) = (a2.model.layout.element_link(3), b2.model.layout.element_link(2));
+    let pair = ForestPair {
+        chain_a: 0,
+        link_a: e3,
+        point_a: DVec3::ZERO,
+        chain_b: 1,
+        link_b: f2,
+        point_b: DVec3::ZERO,
+        element: Arc::new(PairSpring { stiffness: 300.0, damping: 5.0 }),
+    };
+    let before = b2.nodes()[3];
+    for _ in 0..30 {
+        Cable::step_together(&mut [&mut a2, &mut b2], vec![pair.clone()], h).unwrap();
+    }
+    b.step(h).unwrap();
+    eprintln!("tail pulled {:e} m off its own motion", b2.nodes()[3].distance(b.nodes()[3]));
+    assert!(b2.nodes()[3].distance(b.nodes()[3]) > 1e-3 && b2.nodes()[3] != before);
 }

@@ -404,12 +404,7 @@ pub(crate) fn add_contacts(
         // collider's face (a hook under a beam), and a contact would fight
         // the fastening (measured: the hanging_payload demo's rope, pinned
         // to the gantry beam's underside, pulled 337 kN).
-        let first_link = layout.element_link(0);
-        let last_link = layout.element_link(layout.elements - 1);
-        let anchored = |link: usize| cable.model.chain.anchors().iter().any(|a| a.link == link);
-        let held_start = !layout.free_start || anchored(first_link);
-        let held_end = layout.end_body.is_some() || anchored(last_link);
-        let (held_first, held_last) = if view.reversed() { (held_end, held_start) } else { (held_start, held_end) };
+        let (held_first, held_last) = held_ends(cable, &view);
         // Speculative reach of each element beyond the rope's surface:
         // what it may travel in the step (twice its speed, plus gravity's
         // fall from rest), plus one radius.
@@ -615,11 +610,29 @@ pub(crate) fn add_body_contacts(
 pub(crate) fn clear(cable: &mut Cable, keep: usize, keep_pairs: usize) {
     cable.model.chain.forces_mut().truncate(keep);
     cable.model.chain.pairs_mut().truncate(keep_pairs);
+    cable.model.chain.clear_external();
+}
+
+/// Whether a rope's first and last nodes (in its user's direction) are
+/// held: by a pin, a clamp or an anchor spring, or at a carried body.
+fn held_ends(cable: &Cable, view: &crate::cable::RopeView<'_>) -> (bool, bool) {
+    let layout = *view.layout();
+    let first_link = layout.element_link(0);
+    let last_link = layout.element_link(layout.elements - 1);
+    let anchored = |link: usize| cable.model.chain.anchors().iter().any(|a| a.link == link);
+    let held_start = !layout.free_start || anchored(first_link);
+    let held_end = layout.end_body.is_some() || anchored(last_link);
+    if view.reversed() {
+        (held_end, held_start)
+    } else {
+        (held_start, held_end)
+    }
 }
 
 /// An element of one of a cable's ropes at the step's start, for the
-/// contacts of the cable with itself.
+/// contacts of ropes with each other.
 struct Segment {
+    cable: usize,
     rope: usize,
     element: usize,
     a: DVec3,
@@ -627,6 +640,21 @@ struct Segment {
     va: DVec3,
     vb: DVec3,
     element_length: f64,
+    radius: f64,
+    /// The arc lengths (m) from the rope's start within which a touch is
+    /// left out (a held end's neighbourhood), and from which on again.
+    free: (f64, f64),
+}
+
+/// The parameter `t` in [0, 1] of the point of the segment `a + t (b − a)`
+/// nearest to `p`.
+fn closest_on_segment(a: DVec3, b: DVec3, p: DVec3) -> f64 {
+    let d = b - a;
+    let l2 = d.length_squared();
+    if l2 <= 1e-300 {
+        return 0.0;
+    }
+    ((p - a).dot(d) / l2).clamp(0.0, 1.0)
 }
 
 /// The parameters `(s, t)` in [0, 1] of the closest points of the
@@ -660,43 +688,103 @@ fn closest_on_segments(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (f64, f64)
 
 /// Adds this step's contacts of `cable` with itself: every two elements
 /// of its ropes (of one rope, or of two ropes of its tree) whose capsules
-/// of the rope's radius come within the speculative reach (twice what
-/// their relative speed closes in the step, plus half a radius) get a
+/// of the rope's radius come within the speculative reach get a
+/// [`PairContact`] (see [`rope_pairs`]).
+/// Returns how fast the contacts close (m/s), for the step's passes.
+pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, h: f64) -> f64 {
+    let (pairs, approach) = rope_pairs(&[(&*cable, contact)], h, true);
+    cable.model.chain.pairs_mut().extend(pairs.into_iter().map(|p| AttachedPair {
+        link_a: p.link_a,
+        point_a: p.point_a,
+        link_b: p.link_b,
+        point_b: p.point_b,
+        element: Arc::new(p.element),
+    }));
+    approach[0]
+}
+
+/// A contact between two rope elements found by [`rope_pairs`]: the
+/// cables (indices into its list), links and points of its two ends.
+pub(crate) struct RopePair {
+    pub cable_a: usize,
+    pub link_a: usize,
+    pub point_a: DVec3,
+    pub cable_b: usize,
+    pub link_b: usize,
+    pub point_b: DVec3,
+    pub element: PairContact,
+}
+
+/// A node of one of two elements: `(true, n)` the first element's rope's
+/// node `n`, `(false, n)` the second's.
+type NodeOf = (bool, usize);
+
+/// A touch between two ropes found by [`rope_pairs`], before the
+/// duplicates are dropped: the distance between the centrelines (m),
+/// where it is on each rope (cable, rope, arc length in radii), for a
+/// node's touch the node and the other rope (cable, rope, node, cable,
+/// rope), and the contact.
+struct Found {
+    distance: f64,
+    at: [(usize, usize, f64); 2],
+    key: Option<(usize, usize, usize, usize, usize)>,
+    pair: RopePair,
+}
+
+/// This step's contacts between rope elements of `cables` (each with its
+/// contact settings): of one rope with itself, of two ropes of a cable's
+/// tree, and of two cables. Every two elements whose capsules (each of its
+/// rope's radius) come within the speculative reach (twice what their
+/// relative speed closes in the step, plus half the smaller radius) get a
 /// [`PairContact`] between their nearest material points, with the
 /// direction between them as its normal, frozen for the step. Elements of
 /// one rope nearer along it than half a turn of the rope around itself
 /// (`π r`) are left out: a rope cannot fold that tight, and neighbours
-/// always touch. Candidates come from a sweep over the elements' boxes
-/// along the axis of their largest spread (O(n log n) for a rope that is
-/// not balled up).
-/// Returns how fast the contacts close (m/s), for the step's passes.
-pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, h: f64) -> f64 {
-    let radius = 0.5 * cable.model.diameter;
+/// always touch. Between two cables the law is the softer of the two
+/// cables' (the lower `K`). Candidates come from a sweep over the
+/// elements' boxes along the axis of their largest spread (O(n log n) for
+/// ropes that are not balled up). `within`: the pairs within each cable
+/// (its ropes with themselves and each other), else only those between
+/// two cables. Returns the pairs and, per cable, how fast its contacts
+/// close (m/s), for the step's passes.
+pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: bool) -> (Vec<RopePair>, Vec<f64>) {
     let mut segments = Vec::new();
-    for rope in 0..cable.ropes() {
-        let Some(view) = cable.rope(rope) else {
-            continue;
-        };
-        let (nodes, velocities) = (view.nodes(), view.node_velocities());
-        let element_length = view.layout().element_length;
-        for i in 0..nodes.len().saturating_sub(1) {
-            let (va, vb) = (velocities[i], velocities[i + 1]);
-            segments.push(Segment { rope, element: i, a: nodes[i], b: nodes[i + 1], va, vb, element_length });
+    // Two elements close at their relative speed: each box is padded by
+    // the rope's radius and twice its speed relative to the mean of all
+    // the elements (a swinging rope's elements move together; two boxes'
+    // pads then add up to at least twice the two elements' relative
+    // speed).
+    for (c, (cable, _)) in cables.iter().enumerate() {
+        let radius = 0.5 * cable.model.diameter;
+        for rope in 0..cable.ropes() {
+            let Some(view) = cable.rope(rope) else {
+                continue;
+            };
+            let (nodes, velocities) = (view.nodes(), view.node_velocities());
+            let element_length = view.layout().element_length;
+            // Near a held end the rope is fastened, often at the same
+            // point as another rope (a pendant and a hoist rope at a boom
+            // tip): no touch there, within an element or half a turn
+            // around the rope (`π r`), whichever is longer.
+            let (held_first, held_last) = held_ends(cable, &view);
+            let margin = element_length.max(std::f64::consts::PI * radius);
+            let length = view.length();
+            let free = (if held_first { margin } else { f64::NEG_INFINITY }, if held_last { length - margin } else { f64::INFINITY });
+            for i in 0..nodes.len().saturating_sub(1) {
+                let (va, vb) = (velocities[i], velocities[i + 1]);
+                segments.push(Segment { cable: c, rope, element: i, a: nodes[i], b: nodes[i + 1], va, vb, element_length, radius, free });
+            }
         }
     }
-    // Two elements close at their relative speed: each box is padded by
-    // the rope's radius and twice its speed relative to the cable's mean
-    // (a swinging rope's elements move together).
     let mean = segments.iter().fold(DVec3::ZERO, |m, g| m + g.va + g.vb) / (2.0 * segments.len().max(1) as f64);
-    let pad = |g: &Segment| radius + 2.0 * h * (g.va - mean).length().max((g.vb - mean).length());
-    let bounds = |g: &Segment| (g.a.min(g.b) - DVec3::splat(pad(g)), g.a.max(g.b) + DVec3::splat(pad(g)));
+    let pads: Vec<f64> = segments.iter().map(|g| g.radius + 2.0 * h * (g.va - mean).length().max((g.vb - mean).length())).collect();
+    let boxes: Vec<(DVec3, DVec3)> = segments.iter().zip(&pads).map(|(g, &pad)| (g.a.min(g.b) - DVec3::splat(pad), g.a.max(g.b) + DVec3::splat(pad))).collect();
     // Candidates: a sweep over the boxes along the axis in which the
     // elements spread most (a rope's length, for a rope that is not balled
     // up, so each element meets only its neighbours along the rope and
     // whatever crosses it). Sorted with a total order: the same pairs in
     // the same order on every run (each pair with its lower-numbered
     // element first).
-    let boxes: Vec<(DVec3, DVec3)> = segments.iter().map(bounds).collect();
     let (lo_all, hi_all) = boxes.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, h), b| (l.min(b.0), h.max(b.1)));
     let spread = hi_all - lo_all;
     let axis = if spread.x >= spread.y && spread.x >= spread.z {
@@ -708,57 +796,112 @@ pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, h: f6
     };
     let mut order: Vec<usize> = (0..segments.len()).collect();
     order.sort_by(|&i, &j| boxes[i].0[axis].total_cmp(&boxes[j].0[axis]).then(i.cmp(&j)));
-    let mut approach = 0.0f64;
-    let mut pairs = Vec::new();
+    let mut approach = vec![0.0f64; cables.len()];
+    let mut found: Vec<Found> = Vec::new();
     for (k, &i) in order.iter().enumerate() {
         for &j in &order[k + 1..] {
             if boxes[j].0[axis] > boxes[i].1[axis] {
                 break;
             }
             let (gi, gj) = (&segments[i.min(j)], &segments[i.max(j)]);
-            if gi.rope == gj.rope && (gi.element.abs_diff(gj.element).saturating_sub(1) as f64) * gi.element_length < std::f64::consts::PI * radius {
+            if (gi.cable == gj.cable) != within {
+                continue;
+            }
+            let same_rope = gi.cable == gj.cable && gi.rope == gj.rope;
+            if same_rope && (gi.element.abs_diff(gj.element).saturating_sub(1) as f64) * gi.element_length < std::f64::consts::PI * gi.radius {
                 continue;
             }
             if boxes[j].0.cmpgt(boxes[i].1).any() || boxes[j].1.cmplt(boxes[i].0).any() {
                 continue;
             }
+            let (radii, least) = (gi.radius + gj.radius, gi.radius.min(gj.radius));
             // Cheap rejection first (most candidates are a rope's
             // neighbours moving with it): the midpoints farther apart than
             // the two half lengths, the two radii and the reach of their
             // fastest relative node motion.
             let fastest = (gi.va - gj.va).length().max((gi.va - gj.vb).length()).max((gi.vb - gj.va).length()).max((gi.vb - gj.vb).length());
             let half = 0.5 * (gi.a.distance(gi.b) + gj.a.distance(gj.b));
-            if (gi.a + gi.b).distance(gj.a + gj.b) * 0.5 - half - 2.0 * radius > 2.0 * h * fastest + 0.5 * radius {
+            if (gi.a + gi.b).distance(gj.a + gj.b) * 0.5 - half - radii > 2.0 * h * fastest + 0.5 * least {
                 continue;
             }
+            // Two elements this near count their fastest relative node
+            // motion for the step's passes, touching or not (a rope
+            // wrapping over another, or bouncing off it, moves its touch
+            // points that fast: a swinging pendant hitting a taut rope
+            // failed the step after the impact with one pass, whose
+            // touches closed at under 1 m/s while the pendant's nodes
+            // around them moved at 3 m/s).
+            approach[gi.cable] = approach[gi.cable].max(fastest);
+            approach[gj.cable] = approach[gj.cable].max(fastest);
+            // The touches of the two capsules: each node of either element
+            // against the other element (a rope wrapped over another, or
+            // lying along it, is held at every node), and the nearest
+            // points of the two when both lie inside their elements (two
+            // ropes crossing between nodes).
             let (fa, fb) = closest_on_segments(gi.a, gi.b, gj.a, gj.b);
-            // A touch at an element's start node is its predecessor's, at
-            // that one's end (one contact per node, not one per element
-            // meeting there).
-            if (fa == 0.0 && gi.element > 0) || (fb == 0.0 && gj.element > 0) {
-                continue;
+            // (fa, fb, and for a node's touch: whether the node is the
+            // first element's, and which)
+            let mut touches: Vec<(f64, f64, Option<NodeOf>)> = Vec::with_capacity(5);
+            if fa > 0.0 && fa < 1.0 && fb > 0.0 && fb < 1.0 {
+                touches.push((fa, fb, None));
             }
-            let (pa, pb) = (gi.a.lerp(gi.b, fa), gj.a.lerp(gj.b, fb));
-            let d = pa.distance(pb);
-            let relative = gi.va.lerp(gi.vb, fa) - gj.va.lerp(gj.vb, fb);
-            let reach = 2.0 * h * relative.length() + 0.5 * radius;
-            if d - 2.0 * radius > reach || d <= 1e-9 * radius {
-                continue;
+            for (k, node) in [(0.0, gi.a), (1.0, gi.b)] {
+                touches.push((k, closest_on_segment(gj.a, gj.b, node), Some((true, gi.element + k as usize))));
             }
-            let normal = (pa - pb) / d;
-            approach = approach.max(-relative.dot(normal));
-            let (Some((link_a, point_a)), Some((link_b, point_b))) = (
-                cable.rope_point(gi.rope, (gi.element as f64 + fa) * gi.element_length),
-                cable.rope_point(gj.rope, (gj.element as f64 + fb) * gj.element_length),
-            ) else {
-                continue;
-            };
-            let element = PairContact { normal, radius: 2.0 * radius, law: contact.law };
-            pairs.push(AttachedPair { link_a, point_a, link_b, point_b, element: Arc::new(element) });
+            for (k, node) in [(0.0, gj.a), (1.0, gj.b)] {
+                touches.push((closest_on_segment(gi.a, gi.b, node), k, Some((false, gj.element + k as usize))));
+            }
+            for (fa, fb, vertex) in touches {
+                let (sa, sb) = ((gi.element as f64 + fa) * gi.element_length, (gj.element as f64 + fb) * gj.element_length);
+                if sa < gi.free.0 || sa > gi.free.1 || sb < gj.free.0 || sb > gj.free.1 {
+                    continue;
+                }
+                let (pa, pb) = (gi.a.lerp(gi.b, fa), gj.a.lerp(gj.b, fb));
+                let d = pa.distance(pb);
+                let relative = gi.va.lerp(gi.vb, fa) - gj.va.lerp(gj.vb, fb);
+                let reach = 2.0 * h * relative.length() + 0.5 * least;
+                if d - radii > reach || d <= 1e-9 * least {
+                    continue;
+                }
+                let normal = (pa - pb) / d;
+                let (ca, cb) = (cables[gi.cable].0, cables[gj.cable].0);
+                let (Some((link_a, point_a)), Some((link_b, point_b))) = (ca.rope_point(gi.rope, sa), cb.rope_point(gj.rope, sb)) else {
+                    continue;
+                };
+                let (la, lb) = (cables[gi.cable].1.law, cables[gj.cable].1.law);
+                let law = if lb.stiffness < la.stiffness { lb } else { la };
+                let element = PairContact { normal, radius: radii, law };
+                let at = [(gi.cable, gi.rope, sa / gi.radius), (gj.cable, gj.rope, sb / gj.radius)];
+                // A node's touch is keyed by the node and the other rope.
+                let key =
+                    vertex.map(|(first, node)| if first { (gi.cable, gi.rope, node, gj.cable, gj.rope) } else { (gj.cable, gj.rope, node, gi.cable, gi.rope) });
+                found.push(Found { distance: d, at, key, pair: RopePair { cable_a: gi.cable, link_a, point_a, cable_b: gj.cable, link_b, point_b, element } });
+            }
         }
     }
-    cable.model.chain.pairs_mut().extend(pairs);
-    approach
+    // One contact per touch: a node found against both elements that meet
+    // at the nearest point of the other rope, or two touches at the same
+    // place found from both ropes. Nearest first, a touch is kept unless
+    // one kept is of the same node against the same rope, or within a
+    // twentieth of a radius of it along both ropes.
+    let mut kept: Vec<usize> = Vec::new();
+    let mut by_distance: Vec<usize> = (0..found.len()).collect();
+    by_distance.sort_by(|&i, &j| found[i].distance.total_cmp(&found[j].distance).then(i.cmp(&j)));
+    for i in by_distance {
+        let ([a, b], key) = (found[i].at, found[i].key);
+        let near = |k: &usize| {
+            let ([ka, kb], kkey) = (found[*k].at, found[*k].key);
+            let same_place = (ka.0, ka.1, kb.0, kb.1) == (a.0, a.1, b.0, b.1) && (ka.2 - a.2).abs() < 0.05 && (kb.2 - b.2).abs() < 0.05;
+            same_place || (key.is_some() && kkey == key)
+        };
+        if !kept.iter().any(near) {
+            kept.push(i);
+        }
+    }
+    kept.sort_unstable();
+    let mut found: Vec<Option<RopePair>> = found.into_iter().map(|f| Some(f.pair)).collect();
+    let pairs = kept.into_iter().filter_map(|i| found[i].take()).collect();
+    (pairs, approach)
 }
 
 #[cfg(test)]

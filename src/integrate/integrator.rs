@@ -244,6 +244,32 @@ impl Integrator {
         }
     }
 
+    /// A new integrator with the settings of `like` (scheme, Newton,
+    /// sub-steps) and the adaptive split of the most split of `all`: for
+    /// a step of several systems taken as one.
+    pub(crate) fn joint(like: &Integrator, all: impl Iterator<Item = u32>) -> Integrator {
+        Integrator {
+            scheme: like.scheme.clone(),
+            newton: like.newton.clone(),
+            substeps: like.substeps,
+            max_explicit_substeps: like.max_explicit_substeps,
+            split: all.max().unwrap_or(1).max(1),
+            calm: 0,
+            ws: Workspace::default(),
+        }
+    }
+
+    /// The adaptive split the next implicit step starts from.
+    pub(crate) fn split(&self) -> u32 {
+        self.split
+    }
+
+    /// Takes the adaptive split of a joint step ([`Integrator::joint`]).
+    pub(crate) fn take_split(&mut self, joint: &Integrator) {
+        self.split = joint.split;
+        self.calm = joint.calm;
+    }
+
     /// Forgets what the integrator kept from earlier steps (the predictor's
     /// previous acceleration, the sub-step split, the last step's backup).
     /// Call it after the system's coordinates changed in number or meaning

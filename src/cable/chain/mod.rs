@@ -19,9 +19,13 @@
 //!
 //! All spatial quantities are in the world frame about [`Chain::origin`].
 
+mod forest;
 mod nonsmooth;
 mod parts;
 mod sweep;
+
+pub(crate) use forest::ExternalPoint;
+pub use forest::{Forest, ForestPair};
 
 pub use nonsmooth::StaticError;
 pub use parts::*;
@@ -105,6 +109,10 @@ pub struct Chain {
     /// Per pair at the last residual: the points (relative to `origin`)
     /// and the tangents, for the solve's loop correction.
     pub(crate) pair_scratch: Vec<PairScratch>,
+    /// Point wrenches a [`Forest`] sets on this chain's links for one
+    /// evaluation (the chain's half of a pair element with another chain);
+    /// transient: cleared by a topology change, and by whoever set them.
+    pub(crate) external: Vec<ExternalPoint>,
     /// Tests only: `false` leaves the pair correction out of the solve.
     #[cfg(test)]
     pub(crate) pair_coupling: bool,
@@ -188,6 +196,7 @@ impl Chain {
             forces: Vec::new(),
             pairs: Vec::new(),
             pair_scratch: Vec::new(),
+            external: Vec::new(),
             #[cfg(test)]
             pair_coupling: true,
             loads: Vec::new(),
@@ -225,6 +234,7 @@ impl Chain {
             .chain(self.anchors.iter().map(|a| a.link))
             .chain(self.forces.iter().map(|f| f.link))
             .chain(self.pairs.iter().flat_map(|p| [p.link_a, p.link_b]))
+            .chain(self.external.iter().map(|e| e.link))
     }
 
     /// Assigns link scratch slots to links with mass, loads, anchors or
@@ -240,7 +250,7 @@ impl Chain {
         let same = key.built
             && key.n == n
             && self.poses.len() == n
-            && key.links.len() == self.loads.len() + self.anchors.len() + self.forces.len() + 2 * self.pairs.len()
+            && key.links.len() == self.loads.len() + self.anchors.len() + self.forces.len() + 2 * self.pairs.len() + self.external.len()
             && key.springs.len() == self.rotation_springs.len()
             && key.links.iter().copied().eq(self.loaded_links())
             && key.springs.iter().copied().eq(self.rotation_springs.iter().map(|r| r.first))
@@ -302,7 +312,7 @@ impl Chain {
         self.links.clear();
         self.links.resize(count as usize, LinkScratch::default());
         self.anchor_blocks.clear();
-        let pair_links: Vec<usize> = self.pairs.iter().flat_map(|p| [p.link_a, p.link_b]).collect();
+        let pair_links: Vec<usize> = self.pairs.iter().flat_map(|p| [p.link_a, p.link_b]).chain(self.external.iter().map(|e| e.link)).collect();
         for link in self.anchors.iter().map(|a| a.link).chain(self.forces.iter().map(|f| f.link)).chain(pair_links) {
             let ls = &mut self.links[self.link_slot[link] as usize];
             if ls.anchor == u32::MAX {
@@ -356,6 +366,11 @@ impl Chain {
         for (k, p) in self.pairs.iter().enumerate() {
             if p.link_a >= len || p.link_b >= len {
                 return bad(format!("pair element {k}"), p.link_a.max(p.link_b));
+            }
+        }
+        for (k, e) in self.external.iter().enumerate() {
+            if e.link >= len {
+                return bad(format!("pair element {k} with another chain"), e.link);
             }
         }
         for (k, r) in self.rotation_springs.iter().enumerate() {
@@ -464,14 +479,14 @@ impl Chain {
     }
 
     /// Force elements between two points of the chain ([`PairElement`](super::force::PairElement)):
-    /// each closes a loop in the chain's tree, and the solve accounts for
-    /// the coupling of its two points exactly: after the O(n) sweep, a
-    /// Woodbury correction over the pairs (per pair, two O(n)
-    /// back-substitutions and two unknowns of a dense system when its law
-    /// acts along one direction, [`PairWrench::normal`], else six), so
-    /// Newton keeps its rate however stiff the pair is; the cost is
-    /// O(m n) per Newton iteration for m pairs (docs/architecture.md,
-    /// "Contact"; docs/performance.md).
+    /// each closes a loop in the chain's tree, and the solve adds its
+    /// stiffness and damping exactly: after the O(n) sweep (which has
+    /// each pair's force, not its stiffness), a Woodbury correction over
+    /// the pairs (per pair, one O(n) back-substitution and one unknown of
+    /// a dense system when its law acts along one direction,
+    /// [`PairWrench::normal`], else three), so Newton keeps its rate
+    /// however stiff the pair is; the cost is O(m n) per Newton iteration
+    /// for m pairs (docs/architecture.md, "Contact"; docs/performance.md).
     pub fn pairs(&self) -> &[AttachedPair] {
         &self.pairs
     }
@@ -575,6 +590,7 @@ impl Chain {
         self.joints.splice(at..at, joints);
         self.joint_forces.splice(at..at, std::iter::repeat_n(0.0, k));
         self.branch.clear();
+        self.external.clear();
         self.slot_key.built = false;
         Ok(())
     }
@@ -643,6 +659,7 @@ impl Chain {
         }
         self.joint_forces.drain(range.clone());
         self.branch.clear();
+        self.external.clear();
         self.slot_key.built = false;
         Ok(self.joints.drain(range).collect())
     }

@@ -1,6 +1,7 @@
 //! The O(n) passes: kinematics, the tip-to-base residual sweep with the
 //! articulated-body elimination, and the forward substitution.
 
+use super::forest::{loop_correction, LoopPair};
 use super::*;
 use crate::cable::force::{point_to_spatial, ForceElement, PointState, PointWrench};
 use crate::cable::spatial::{skew, M6, V6};
@@ -257,6 +258,14 @@ impl Chain {
     /// writes `−r` into `r` and runs the articulated-body backward sweep
     /// for that right-hand side on the way (finish with `forward_solve`).
     fn sweep(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64], r: &mut [f64], solve: Option<(f64, f64)>) -> Result<(), SystemError> {
+        Self::check_finite(q, v, a)?;
+        self.kinematics(t, q, v, a)?;
+        self.sweep_loads(t, r, solve)
+    }
+
+    /// A NaN or infinity in `q`, `v` or `a`, by the first coordinate that
+    /// holds one.
+    pub(super) fn check_finite(q: &[f64], v: &[f64], a: &[f64]) -> Result<(), SystemError> {
         // One cheap pass: a NaN or infinity anywhere makes the sum non-finite
         // (then find which coordinate, for the message).
         if !(q.iter().sum::<f64>() + v.iter().sum::<f64>() + a.iter().sum::<f64>()).is_finite() {
@@ -264,7 +273,12 @@ impl Chain {
                 return Err(SystemError::NonFinite { index: index % q.len().max(1) });
             }
         }
-        self.kinematics(t, q, v, a)?;
+        Ok(())
+    }
+
+    /// [`Chain::sweep`] after the kinematics pass: the loads and force
+    /// elements, then the tip-to-base sweep.
+    pub(super) fn sweep_loads(&mut self, t: f64, r: &mut [f64], solve: Option<(f64, f64)>) -> Result<(), SystemError> {
         let n = self.joints.len();
         for ld in &self.loads {
             let ps = &self.poses[ld.link];
@@ -284,19 +298,23 @@ impl Chain {
             let slot = self.link_slot[fe.link] as usize;
             apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[fe.link], self.origin, fe.local_point, t, fe.element.as_ref());
         }
-        // Pair elements: each point's own tangent on its link, as a point
-        // element's; their coupling is the solve's pair correction.
+        // Pair elements: each point's force on its link (with its
+        // moment-arm tangent); their stiffness and damping are the solve's
+        // pair correction.
         self.pair_scratch.clear();
         for pr in &self.pairs {
             let (at_a, pa) = point_state(&self.poses[pr.link_a], self.origin, pr.point_a);
             let (at_b, pb) = point_state(&self.poses[pr.link_b], self.origin, pr.point_b);
             let w = pr.element.wrench(t, &at_a, &at_b);
-            let (stiffness, damping) = (M6 { d: w.stiffness, ..M6::ZERO }, M6 { d: w.damping, ..M6::ZERO });
             for (link, p, force) in [(pr.link_a, pa, w.force), (pr.link_b, pb, -w.force)] {
-                let point = PointWrench { force, moment: DVec3::ZERO, stiffness, damping };
+                let point = PointWrench { force, moment: DVec3::ZERO, stiffness: M6::ZERO, damping: M6::ZERO };
                 add_point_wrench(&mut self.links[self.link_slot[link] as usize], &mut self.anchor_blocks, p, &point);
             }
             self.pair_scratch.push(PairScratch { link_a: pr.link_a, link_b: pr.link_b, pa, pb, stiffness: w.stiffness, damping: w.damping, normal: w.normal });
+        }
+        // Halves of pair elements with other chains (a forest's).
+        for e in &self.external {
+            add_point_wrench(&mut self.links[self.link_slot[e.link] as usize], &mut self.anchor_blocks, e.p, &e.wrench);
         }
         // Tip-to-base sweep: composite loads, residual, geometric stiffness.
         // The load tangent H = [[ha, hb], [0, 0]] is summed tip to base; its
@@ -374,6 +392,13 @@ impl Chain {
     /// `Ĩ_s = I_s + Ĩ_{s+1} − U_{s+1} U_{s+1}ᵀ / D_{s+1}`, and needs `G_s` only
     /// through `U_s = Ĩ_s S_s − c_q G_s S_s`: no 6×6 geometric block is formed.
     pub fn solve_into(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
+        self.solve_tree(c_v, c_q, b, x)?;
+        self.pair_correction(c_v, c_q, x)
+    }
+
+    /// [`Chain::solve_into`] without the pair elements' loop correction
+    /// (the tree's own tangent, each pair point's stiffness on its link).
+    pub(super) fn solve_tree(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         let mut aba = AbaCarry::default();
         let tree = !self.limbs.is_empty();
         if tree {
@@ -397,7 +422,7 @@ impl Chain {
             }
         }
         self.forward_solve(x);
-        self.pair_correction(c_v, c_q, x)
+        Ok(())
     }
 
     /// Solves the last factorized tangent (the elimination of the last
@@ -405,7 +430,7 @@ impl Chain {
     /// for another right-hand side `b`, without the pair correction: the
     /// tip-to-base bias pass alone, then the forward substitution (O(n),
     /// a fraction of a full solve). Overwrites the rows' `u`.
-    fn resolve(&mut self, b: &[f64], x: &mut [f64], link: impl FnMut(usize, V6)) {
+    pub(super) fn resolve(&mut self, b: &[f64], x: &mut [f64], link: impl FnMut(usize, V6)) {
         let tree = !self.limbs.is_empty();
         if tree {
             self.limb_carry.iter_mut().for_each(|c| c.bias = V6::ZERO);
@@ -447,7 +472,7 @@ impl Chain {
 
     /// The sub-joint whose link is the parent of sub-joint `s`'s link
     /// (`None`: the base).
-    fn joint_parent(&self, s: usize) -> Option<usize> {
+    pub(super) fn joint_parent(&self, s: usize) -> Option<usize> {
         if !self.limbs.is_empty() && self.limb_start[s] {
             let k = self.limbs.partition_point(|l| l.first < s);
             return self.limbs.get(k).and_then(|l| l.parent);
@@ -456,28 +481,21 @@ impl Chain {
     }
 
     /// Sub-joint `s` and the sub-joints its link hangs from, to the base.
-    fn ancestors(&self, s: usize) -> impl Iterator<Item = usize> + '_ {
+    pub(super) fn ancestors(&self, s: usize) -> impl Iterator<Item = usize> + '_ {
         std::iter::successors(Some(s), |&j| self.joint_parent(j))
     }
 
     /// The spatial motion of each of `links` for the coordinate change `x`
     /// (`Σ S_j x_j` over the link's ancestors), into `out`.
-    fn link_motions(&self, x: &[f64], links: &[usize], out: &mut [V6]) {
+    pub(super) fn link_motions(&self, x: &[f64], links: &[usize], out: &mut [V6]) {
         for (o, &l) in out.iter_mut().zip(links) {
             *o = self.ancestors(l).fold(V6::ZERO, |m, s| m + self.rows[s].s * x[s]);
         }
     }
 
-    /// The loop correction of the pair elements (see [`Chain::pairs`]):
-    /// the sweep's tangent `A` holds each pair point's own stiffness
-    /// `J_aᵀ K J_a + J_bᵀ K J_b` (`K = c_q K_p + c_v C_p`); the exact
-    /// tangent adds the coupling `−J_aᵀ K J_b − J_bᵀ K J_a`. With the
-    /// pair's directions `D` (its normal alone when `K` is a multiple of
-    /// `n nᵀ`, else the three world axes) and `K = D K_r Dᵀ`, that is
-    /// `W C Wᵀ` with `W = [J_aᵀ D, J_bᵀ D]` and `C = −[[0, K_r], [K_r, 0]]`.
-    /// By Woodbury, `x ← x − Z (I + C Wᵀ Z)⁻¹ C Wᵀ x` with `Z = A⁻¹ W`:
-    /// two (or six) back-substitutions per pair and a dense system of two
-    /// (or six) unknowns per pair; no inverse of `K` is needed.
+    /// The pair elements' stiffness and damping (see [`Chain::pairs`]):
+    /// the sweep's tangent leaves them out, and this adds them exactly by
+    /// a Woodbury correction over the pairs ([`loop_correction`]).
     fn pair_correction(&mut self, c_v: f64, c_q: f64, x: &mut [f64]) -> Result<(), SystemError> {
         #[cfg(test)]
         if !self.pair_coupling {
@@ -486,108 +504,8 @@ impl Chain {
         if self.pair_scratch.is_empty() {
             return Ok(());
         }
-        let n = self.joints.len();
-        // Per pair: its directions, `K_r` and its first column.
-        let mut blocks: Vec<(Vec<DVec3>, Vec<f64>, usize)> = Vec::with_capacity(self.pair_scratch.len());
-        let mut cols = 0;
-        for p in &self.pair_scratch {
-            let kt = p.stiffness * c_q + p.damping * c_v;
-            let dirs = match p.normal {
-                Some(nrm) => vec![nrm],
-                None => vec![DVec3::X, DVec3::Y, DVec3::Z],
-            };
-            let kr: Vec<f64> = dirs.iter().flat_map(|di| dirs.iter().map(move |dj| di.dot(kt * *dj))).collect();
-            let r = dirs.len();
-            blocks.push((dirs, kr, cols));
-            cols += 2 * r;
-        }
-        // Each column: a unit force along a direction at a pair's point.
-        let mut columns: Vec<(usize, DVec3, DVec3)> = Vec::with_capacity(cols);
-        for (p, (dirs, _, _)) in self.pair_scratch.iter().zip(&blocks) {
-            for (link, point) in [(p.link_a, p.pa), (p.link_b, p.pb)] {
-                columns.extend(dirs.iter().map(|&d| (link, point, d)));
-            }
-        }
-        // Wᵀ y, each column's point velocity along its direction for a
-        // coordinate change y, from the motions of the pair links.
-        let mut slot = vec![u32::MAX; n];
-        let mut links: Vec<usize> = Vec::new();
-        for &(l, _, _) in &columns {
-            if slot[l] == u32::MAX {
-                slot[l] = links.len() as u32;
-                links.push(l);
-            }
-        }
-        let w_t = |motion: &[V6], out: &mut [f64]| {
-            for (o, &(l, p, e)) in out.iter_mut().zip(&columns) {
-                let m = motion[slot[l] as usize];
-                *o = (m.bot + m.top.cross(p)).dot(e);
-            }
-        };
-        let mut z = vec![0.0; cols * n];
-        let mut rhs = vec![0.0; n];
-        let mut motion = vec![V6::ZERO; links.len()];
-        let mut g = vec![0.0; cols * cols]; // g[r * cols + c] = W_rᵀ z_c
-        let mut col_out = vec![0.0; cols];
-        for (c, &(link, p, e)) in columns.iter().enumerate() {
-            rhs.iter_mut().for_each(|r| *r = 0.0);
-            let f = V6::new(p.cross(e), e);
-            for s in self.ancestors(link) {
-                rhs[s] = self.rows[s].s.dot(f);
-            }
-            self.resolve(&rhs, &mut z[c * n..(c + 1) * n], |s, m| {
-                if slot[s] != u32::MAX {
-                    motion[slot[s] as usize] = m;
-                }
-            });
-            w_t(&motion, &mut col_out);
-            for r in 0..cols {
-                g[r * cols + c] = col_out[r];
-            }
-        }
-        let mut g0 = vec![0.0; cols];
-        self.link_motions(x, &links, &mut motion);
-        w_t(&motion, &mut g0);
-        // C v per pair: (C v)_a = −K_r v_b, (C v)_b = −K_r v_a.
-        let apply_c = |v: &[f64], out: &mut [f64]| {
-            for (dirs, kr, first) in &blocks {
-                let r = dirs.len();
-                for i in 0..r {
-                    let (mut ya, mut yb) = (0.0, 0.0);
-                    for j in 0..r {
-                        ya -= kr[i * r + j] * v[first + r + j];
-                        yb -= kr[i * r + j] * v[first + j];
-                    }
-                    out[first + i] = ya;
-                    out[first + r + i] = yb;
-                }
-            }
-        };
-        // M = I + C G, column by column; right-hand side C g0.
-        let mut mat = vec![0.0; cols * cols];
-        let mut gc = vec![0.0; cols];
-        let mut cgc = vec![0.0; cols];
-        for c in 0..cols {
-            for r in 0..cols {
-                gc[r] = g[r * cols + c];
-            }
-            apply_c(&gc, &mut cgc);
-            for r in 0..cols {
-                mat[r * cols + c] = cgc[r] + if r == c { 1.0 } else { 0.0 };
-            }
-        }
-        let mut rhs = vec![0.0; cols];
-        apply_c(&g0, &mut rhs);
-        let mut y = vec![0.0; cols];
-        crate::integrate::gauss_solve(cols, &mut mat, &rhs, &mut y)?;
-        for (c, &yc) in y.iter().enumerate() {
-            if yc != 0.0 {
-                for (xi, zi) in x.iter_mut().zip(&z[c * n..(c + 1) * n]) {
-                    *xi -= zi * yc;
-                }
-            }
-        }
-        Ok(())
+        let pairs: Vec<LoopPair> = self.pair_scratch.iter().map(|p| LoopPair::within(0, p)).collect();
+        loop_correction(&mut [(self, x)], &pairs, c_v, c_q)
     }
 
     /// Tip-to-base elimination of sub-joint `s` (right-hand side `b`): a
@@ -612,7 +530,7 @@ impl Chain {
     }
 
     /// Base-to-tip half of the articulated-body solve.
-    fn forward_solve(&mut self, x: &mut [f64]) {
+    pub(super) fn forward_solve(&mut self, x: &mut [f64]) {
         self.forward_solve_with(x, |_, _| {});
     }
 
