@@ -5,7 +5,9 @@
 //! rope with `contacts = false` and no gravity (at rest in the same place,
 //! no contact elements; with gravity it would fall for ever). Each is
 //! settled for 1 s before timing. `docs/performance.md` reports the ratios
-//! and the growth from N = 100 to 1 000.
+//! and the growth from N = 100 to 1 000. Two and ten separate ropes
+//! resting across each other on the ground (one island, stepped as one
+//! system) against the same ropes lying apart.
 
 use bevy_rapier_cable::scenario;
 use bevy_rapier_cable::sim::World;
@@ -125,7 +127,68 @@ path = [{points}]
     w
 }
 
+/// `ropes` separate 4 m ropes (0.1 m elements) on a frictionless ground
+/// box: half along x, 0.5 m apart, the other half along z across them,
+/// let go 1 mm above touching (`crossing`) or laid on the ground beside
+/// the first half, touching nothing (`false`); settled for 1 s. Crossing,
+/// the ropes rest on each other at `(ropes/2)²` crossings, all the cables
+/// one island stepped as one system.
+fn ropes_world(ropes: usize, crossing: bool) -> World {
+    let half = ropes / 2;
+    let mut src = String::from(
+        r#"
+[simulation]
+duration = 1000.0
+dt = 0.016666666666666666
+
+[[body]]
+name = "ground"
+type = "fixed"
+shape = "cuboid"
+half_extents = [20.0, 0.5, 20.0]
+position = [0.0, -0.5, 0.0]
+friction = 0.0
+"#,
+    );
+    let offset = |k: usize| (k as f64 - 0.5 * (half as f64 - 1.0)) * 0.5;
+    for k in 0..ropes {
+        let path = if k < half {
+            let z = offset(k);
+            format!("[[-2.0, 0.011, {z}], [2.0, 0.011, {z}]]")
+        } else if crossing {
+            let x = offset(k - half);
+            format!("[[{x}, 0.032, -2.0], [{x}, 0.032, 2.0]]")
+        } else {
+            let x = offset(k - half);
+            format!("[[{x}, 0.011, 3.0], [{x}, 0.011, 7.0]]")
+        };
+        src.push_str(&format!(
+            r#"
+[[cable]]
+name = "rope{k}"
+length = 4.0
+segments = 40
+diameter = 0.020
+material = "steel_wire_rope_6x36_iwrc"
+damping = 0.05
+friction = 0.0
+path = {path}
+"#
+        ));
+    }
+    settled(&src, "ropes_bench.toml")
+}
+
 fn contact(c: &mut Criterion<cpu_time::ThreadCpuTime>) {
+    let mut g = c.benchmark_group("contact/ropes_crossing_step");
+    for ropes in [2usize, 10] {
+        for crossing in [false, true] {
+            let mut w = ropes_world(ropes, crossing);
+            let id = BenchmarkId::new(if crossing { "crossing" } else { "apart" }, ropes);
+            g.bench_function(id, |b| b.iter(|| w.step().unwrap()));
+        }
+    }
+    g.finish();
     let mut g = c.benchmark_group("contact/rope_on_itself_step");
     for n in [200usize, 1000] {
         for crossings in [0usize, 1, 10] {

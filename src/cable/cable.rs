@@ -182,7 +182,7 @@ impl Cable {
         if let Some(c) = cables.iter().find(|c| (c.state.t - t).abs() > 1e-9 * h.max(t.abs())) {
             return Err(CableError::Diverged { time: t, reason: format!("cables stepped together at different times ({t} s and {} s)", c.state.t) });
         }
-        let mut integrator = Integrator::joint(&first.integrator, cables.iter().map(|c| c.integrator.split()));
+        let mut integrator = Integrator::joint(&first.integrator, cables.iter().map(|c| &c.integrator));
         let join = |f: fn(&State) -> &Vec<f64>| cables.iter().flat_map(|c| f(&c.state).iter().copied()).collect::<Vec<f64>>();
         let mut state = State { t, q: join(|s| &s.q), v: join(|s| &s.v), a: join(|s| &s.a), a_hat: join(|s| &s.a_hat) };
         let saved: Vec<State> = cables.iter().map(|c| c.state.clone()).collect();

@@ -245,23 +245,20 @@ impl Integrator {
     }
 
     /// A new integrator with the settings of `like` (scheme, Newton,
-    /// sub-steps) and the adaptive split of the most split of `all`: for
-    /// a step of several systems taken as one.
-    pub(crate) fn joint(like: &Integrator, all: impl Iterator<Item = u32>) -> Integrator {
+    /// sub-steps) and the adaptive split of the most split of `all` (with
+    /// the fewest calm steps of them): for a step of several systems taken
+    /// as one.
+    pub(crate) fn joint<'a>(like: &Integrator, all: impl Iterator<Item = &'a Integrator>) -> Integrator {
+        let (split, calm) = all.fold((1, u32::MAX), |(s, c), i| (s.max(i.split), c.min(i.calm)));
         Integrator {
             scheme: like.scheme.clone(),
             newton: like.newton.clone(),
             substeps: like.substeps,
             max_explicit_substeps: like.max_explicit_substeps,
-            split: all.max().unwrap_or(1).max(1),
-            calm: 0,
+            split,
+            calm: if calm == u32::MAX { 0 } else { calm },
             ws: Workspace::default(),
         }
-    }
-
-    /// The adaptive split the next implicit step starts from.
-    pub(crate) fn split(&self) -> u32 {
-        self.split
     }
 
     /// Takes the adaptive split of a joint step ([`Integrator::joint`]).
