@@ -90,19 +90,7 @@ fn crossing_world(n: usize, crossings: usize) -> World {
     let points: Vec<String> = path.iter().map(|p| format!("[{}, {}, {}]", p[0], p[1], p[2])).collect();
     let laid: f64 = path.windows(2).map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2) + (w[1][2] - w[0][2]).powi(2)).sqrt()).sum();
     let src = format!(
-        r#"
-[simulation]
-duration = 1000.0
-dt = 0.016666666666666666
-
-[[body]]
-name = "ground"
-type = "fixed"
-shape = "cuboid"
-half_extents = [{half}, 0.5, 5.0]
-position = [0.0, -0.5, 0.0]
-friction = 0.0
-
+        r#"{ground}
 [[cable]]
 name = "rope"
 length = {laid}
@@ -114,7 +102,7 @@ stress_free = true
 friction = 0.0
 path = [{points}]
 "#,
-        half = length + 10.0,
+        ground = frictionless_ground(length + 10.0, 5.0),
         points = points.join(", "),
     );
     let w = settled(&src, "crossing_bench.toml");
@@ -127,15 +115,10 @@ path = [{points}]
     w
 }
 
-/// `ropes` separate 4 m ropes (0.1 m elements) on a frictionless ground
-/// box: half along x, 0.5 m apart, the other half along z across them,
-/// let go 1 mm above touching (`crossing`) or laid on the ground beside
-/// the first half, touching nothing (`false`); settled for 1 s. Crossing,
-/// the ropes rest on each other at `(ropes/2)²` crossings, all the cables
-/// one island stepped as one system.
-fn ropes_world(ropes: usize, crossing: bool) -> World {
-    let half = ropes / 2;
-    let mut src = String::from(
+/// A scenario's head: a long run at the frame step, and a frictionless
+/// fixed ground box (its top at y = 0) of half extents `x` and `z` (m).
+fn frictionless_ground(x: f64, z: f64) -> String {
+    format!(
         r#"
 [simulation]
 duration = 1000.0
@@ -145,11 +128,22 @@ dt = 0.016666666666666666
 name = "ground"
 type = "fixed"
 shape = "cuboid"
-half_extents = [20.0, 0.5, 20.0]
+half_extents = [{x}, 0.5, {z}]
 position = [0.0, -0.5, 0.0]
 friction = 0.0
-"#,
-    );
+"#
+    )
+}
+
+/// `ropes` separate 4 m ropes (0.1 m elements) on a frictionless ground
+/// box: half along x, 0.5 m apart, the other half along z across them,
+/// let go 1 mm above touching (`crossing`) or laid on the ground beside
+/// the first half, touching nothing (`false`); settled for 1 s. Crossing,
+/// the ropes rest on each other at `(ropes/2)²` crossings, all the cables
+/// one island stepped as one system.
+fn ropes_world(ropes: usize, crossing: bool) -> World {
+    let half = ropes / 2;
+    let mut src = frictionless_ground(20.0, 20.0);
     let offset = |k: usize| (k as f64 - 0.5 * (half as f64 - 1.0)) * 0.5;
     for k in 0..ropes {
         let path = if k < half {
