@@ -1,7 +1,7 @@
 //! [`Cable`]: a rope model with its integrator state, stepped in time, with
 //! the queries users read (node positions, tension, moments, energy).
 
-use super::chain::{Chain, Forest, ForestPair, LinkLoad, SpringLaw, StaticError, IN_CHAIN};
+use super::chain::{Chain, Forest, ForestPair, FreeBody, LinkLoad, SpringLaw, StaticError, IN_CHAIN};
 use super::force::{AttachedForce, ForceElement, PointState, PointWrench};
 use super::rope::{RopeLayout, RopeModel, ELEMENT_DOFS};
 use super::spatial::V6;
@@ -170,10 +170,19 @@ impl Cable {
     /// is left at the start of the step (as [`Cable::step`] leaves one).
     /// With one cable and no pairs this is [`Cable::step`].
     pub fn step_together(cables: &mut [&mut Cable], pairs: Vec<ForestPair>, h: f64) -> Result<StepStats, CableError> {
+        Cable::step_with_bodies(cables, &mut [], pairs, h)
+    }
+
+    /// [`Cable::step_together`] with free rigid bodies in the same system
+    /// ([`FreeBody`]: a body touching the ropes, its inertia in their
+    /// solve): `pairs` index the cables, then the bodies (chain
+    /// `cables.len() + k` is body `k`). The bodies are stepped to the
+    /// cables' time; on error they are left as they were.
+    pub fn step_with_bodies(cables: &mut [&mut Cable], bodies: &mut [&mut FreeBody], pairs: Vec<ForestPair>, h: f64) -> Result<StepStats, CableError> {
         let Some(first) = cables.first() else {
             return Ok(StepStats::default());
         };
-        if cables.len() == 1 && pairs.is_empty() {
+        if cables.len() == 1 && pairs.is_empty() && bodies.is_empty() {
             return cables[0].step(h);
         }
         let t = first.state.t;
@@ -183,11 +192,15 @@ impl Cable {
             return Err(CableError::Diverged { time: t, reason: format!("cables stepped together at different times ({t} s and {} s)", c.state.t) });
         }
         let mut integrator = Integrator::joint(&first.integrator, cables.iter().map(|c| &c.integrator));
-        let join = |f: fn(&State) -> &Vec<f64>| cables.iter().flat_map(|c| f(&c.state).iter().copied()).collect::<Vec<f64>>();
+        for b in bodies.iter_mut() {
+            b.state.t = t;
+        }
+        let states: Vec<&State> = cables.iter().map(|c| &c.state).chain(bodies.iter().map(|b| &b.state)).collect();
+        let join = |f: fn(&State) -> &Vec<f64>| states.iter().flat_map(|s| f(s).iter().copied()).collect::<Vec<f64>>();
         let mut state = State { t, q: join(|s| &s.q), v: join(|s| &s.v), a: join(|s| &s.a), a_hat: join(|s| &s.a_hat) };
         let saved: Vec<State> = cables.iter().map(|c| c.state.clone()).collect();
         let result = {
-            let chains: Vec<&mut Chain> = cables.iter_mut().map(|c| &mut c.model.chain).collect();
+            let chains: Vec<&mut Chain> = cables.iter_mut().map(|c| &mut c.model.chain).chain(bodies.iter_mut().map(|b| &mut b.chain)).collect();
             Forest::new(chains, pairs)
                 .map_err(|source| CableError::Integrate(IntegrateError::System { t, source }))
                 .and_then(|mut forest| integrator.step(&mut forest, &mut state, h).map_err(CableError::from))
@@ -206,9 +219,9 @@ impl Cable {
             }
         };
         let mut at = 0;
-        for c in cables.iter_mut() {
-            let n = c.state.q.len();
-            let st = &mut c.state;
+        let cable_states = cables.iter_mut().map(|c| &mut c.state);
+        for st in cable_states.chain(bodies.iter_mut().map(|b| &mut b.state)) {
+            let n = st.q.len();
             st.t = state.t;
             st.q.copy_from_slice(&state.q[at..at + n]);
             st.v.copy_from_slice(&state.v[at..at + n]);
@@ -229,6 +242,9 @@ impl Cable {
                 c.rechart_free_start()?;
             }
             c.refresh();
+        }
+        for b in bodies.iter_mut() {
+            b.refresh();
         }
         Ok(stats)
     }

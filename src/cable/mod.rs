@@ -9,8 +9,8 @@ pub mod force;
 pub use self::force::{AttachedForce, AttachedPair, ForceElement, PairElement, PairSpring, PairWrench, PointSpring, PointState, PointWrench};
 pub mod spatial;
 pub use self::chain::{
-    AnchorSpring, BaseMotion, BaseState, Chain, ChainError, Forest, ForestPair, JointKind, Limb, LinkLoad, LinkMass, RotationSpring, SampledMotion, SpringLaw,
-    StaticError, SubJoint,
+    AnchorSpring, BaseMotion, BaseState, Chain, ChainError, Forest, ForestPair, FreeBody, JointKind, Limb, LinkLoad, LinkMass, RotationSpring, SampledMotion,
+    SpringLaw, StaticError, SubJoint,
 };
 pub mod rope;
 pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeLayout, RopeModel, RopePart, RopeStart, MAX_SEGMENTS};

@@ -281,12 +281,12 @@ impl<'a> Obstacle<'a> {
             .colliders
             .iter()
             .filter(|(_, c)| {
-                // Dynamic bodies are left out for now: their motion is
-                // frozen over the step here, so a falling ball would
-                // squeeze the rope into the ground and fail the solve
-                // (measured: a 50 kg ball at 4.4 m/s onto a rope lying on
-                // the ground). They need their inertia in the rope's solve,
-                // as the carried bodies have.
+                // Dynamic bodies are not obstacles: their motion frozen
+                // over the step, a falling ball squeezed the rope into the
+                // ground and failed the solve (measured: a 50 kg ball at
+                // 4.4 m/s onto a rope lying on the ground). They need their
+                // inertia in the rope's solve: a free body of the island
+                // (`body_pairs`), or a carried body's link.
                 let dynamic = c.parent().and_then(|p| bodies.get(p)).is_some_and(|rb| rb.is_dynamic());
                 !c.is_sensor() && !dynamic && !c.parent().is_some_and(|p| exclude.contains(&p))
             })
@@ -901,6 +901,126 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: boo
     kept.sort_unstable();
     let mut found: Vec<Option<RopePair>> = found.into_iter().map(|f| Some(f.pair)).collect();
     let pairs = kept.into_iter().filter_map(|i| found[i].take()).collect();
+    (pairs, approach)
+}
+
+/// A dynamic rapier body's colliders at a pose, for its contacts with
+/// ropes: each collider's shape and its pose in the body's frame.
+pub(crate) struct BodyShapes<'a> {
+    pub colliders: Vec<(&'a rp::Collider, DVec3, DMat3)>,
+}
+
+impl<'a> BodyShapes<'a> {
+    /// The non-sensor colliders of `rb`.
+    pub fn of(rb: &rp::RigidBody, colliders: &'a rp::ColliderSet) -> Self {
+        let colliders = rb
+            .colliders()
+            .iter()
+            .filter_map(|h| colliders.get(*h))
+            .filter(|c| !c.is_sensor())
+            .map(|c| {
+                let (t, r) = offset(c);
+                (c, t, r)
+            })
+            .collect();
+        BodyShapes { colliders }
+    }
+}
+
+/// The contacts of `cable`'s rope nodes (chain `chain_a` of a forest) with
+/// a free body (chain `chain_b`, its body link `link_b`) at the pose
+/// `(origin, rotation)` moving at `speed` (m/s, a bound on its surface's
+/// speed): each node not held, within the speculative reach of a
+/// collider (its own and the body's motion over `h`, plus the rope's
+/// radius and gravity's fall), gets a [`PairContact`] between it and the
+/// nearest point of the collider's surface (a material point of the body),
+/// the surface's outward normal frozen for the step; so does an element's
+/// interior point nearer to the collider than both its nodes. Returns the
+/// pairs and how fast they may close (m/s).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn body_pairs(
+    cable: &Cable,
+    contact: &CableContact,
+    chain_a: usize,
+    body: &BodyShapes<'_>,
+    (origin, rotation): (DVec3, DMat3),
+    speed: f64,
+    chain_b: usize,
+    link_b: usize,
+    h: f64,
+) -> (Vec<RopePair>, f64) {
+    let radius = 0.5 * cable.model.diameter;
+    let gravity = cable.model.chain.gravity.length();
+    let mut pairs = Vec::new();
+    let mut approach: f64 = 0.0;
+    for rope in 0..cable.ropes() {
+        let Some(view) = cable.rope(rope) else {
+            continue;
+        };
+        let (nodes, velocities) = (view.nodes(), view.node_velocities());
+        let element_length = view.layout().element_length;
+        let n = nodes.len().saturating_sub(1);
+        let (held_first, held_last) = held_ends(cable, &view);
+        for &(collider, lt, lr) in &body.colliders {
+            let (co, cr) = (origin + rotation * lt, rotation * lr);
+            let pose = rp::Pose::from_parts(co.as_vec3(), glam::DQuat::from_mat3(&cr).normalize().as_quat());
+            let aabb = collider.shape().compute_aabb(&pose);
+            let (lo, hi) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
+            for k in (0..=n).filter(|&k| !((k == 0 && held_first) || (k == n && held_last))) {
+                let reach = radius + 2.0 * h * (velocities[k].length() + speed) + h * h * gravity;
+                let p = nodes[k];
+                if (p + DVec3::splat(reach)).cmplt(lo).any() || (p - DVec3::splat(reach)).cmpgt(hi).any() {
+                    continue;
+                }
+                approach = approach.max(velocities[k].length() + speed);
+                let Some((q, normal, d)) = nearest(collider.shape(), cr.transpose() * (p - co)) else {
+                    continue;
+                };
+                if d - radius > reach {
+                    continue;
+                }
+                let Some((link_a, point_a)) = cable.rope_point(rope, k as f64 * element_length) else {
+                    continue;
+                };
+                let element = PairContact { normal: cr * normal, radius, law: contact.law };
+                pairs.push(RopePair { cable_a: chain_a, link_a, point_a, cable_b: chain_b, link_b, point_b: lt + lr * q, element });
+            }
+            // Element interiors nearer than both their nodes (a ball
+            // between two nodes; the distance to a convex shape is convex
+            // along the element): the nearest point, by a ternary search.
+            for i in 0..n {
+                let (a, b) = (cr.transpose() * (nodes[i] - co), cr.transpose() * (nodes[i + 1] - co));
+                let reach = radius + 2.0 * h * (velocities[i].length().max(velocities[i + 1].length()) + speed) + h * h * gravity;
+                let (wa, wb) = (nodes[i], nodes[i + 1]);
+                if (wa.min(wb) - DVec3::splat(reach)).cmpgt(hi).any() || (wa.max(wb) + DVec3::splat(reach)).cmplt(lo).any() {
+                    continue;
+                }
+                let dist = |f: f64| nearest(collider.shape(), a.lerp(b, f)).map_or(f64::INFINITY, |hit| hit.2);
+                let (mut l, mut r) = (0.0, 1.0);
+                for _ in 0..30 {
+                    let (m1, m2) = (l + (r - l) / 3.0, r - (r - l) / 3.0);
+                    if dist(m1) <= dist(m2) {
+                        r = m2;
+                    } else {
+                        l = m1;
+                    }
+                }
+                let f = 0.5 * (l + r);
+                let d = dist(f);
+                if !(f > 1e-3 && f < 1.0 - 1e-3 && d < dist(0.0).min(dist(1.0)) - 1e-3 * radius && d - radius <= reach) {
+                    continue;
+                }
+                let Some((q, normal, _)) = nearest(collider.shape(), a.lerp(b, f)) else {
+                    continue;
+                };
+                let Some((link_a, point_a)) = cable.rope_point(rope, (i as f64 + f) * element_length) else {
+                    continue;
+                };
+                let element = PairContact { normal: cr * normal, radius, law: contact.law };
+                pairs.push(RopePair { cable_a: chain_a, link_a, point_a, cable_b: chain_b, link_b, point_b: lt + lr * q, element });
+            }
+        }
+    }
     (pairs, approach)
 }
 

@@ -91,7 +91,7 @@ use crate::cable::chain::rotation_vector;
 use crate::cable::{
     BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeModel, RopeStart,
 };
-use crate::cable::{Chain, ForestPair};
+use crate::cable::{Chain, ForestPair, FreeBody};
 use crate::integrate::{Scheme, State, StepStats};
 use glam::{DMat3, DQuat, DVec3};
 use rapier3d::prelude as rp;
@@ -1140,7 +1140,8 @@ pub fn step_cables(
     }
     // Ropes of different cables that touch: such cables form an island,
     // stepped as one system (`advance_island`).
-    let islands = cable_islands(cables, h);
+    let free = free_bodies(cables, bodies, &owns, contacts.colliders);
+    let islands = cable_islands(cables, &free, bodies, contacts.colliders, h);
     let mut alone = vec![true; cables.len()];
     for island in &islands {
         island.members.iter().for_each(|&i| alone[i] = false);
@@ -1183,7 +1184,7 @@ pub fn step_cables(
     }
     for island in &islands {
         let count = island.members.iter().map(|&i| passes[i]).max().unwrap_or(1).max(island.passes);
-        advance_island(cables, &island.members, &owns, &contacts, bodies, h, count, n);
+        advance_island(cables, island, &owns, &contacts, bodies, inputs, h, count, n);
     }
     for (ci, cc) in cables.iter_mut().enumerate() {
         if let Some((time, e)) = cc.advance_failure.take() {
@@ -1271,25 +1272,71 @@ fn find_contacts(
 }
 
 /// Cables whose ropes touch each other at a step's start (within the
-/// speculative reach), stepped as one system: the cable indices (in
-/// order) and the passes their closing speed asks for.
+/// speculative reach), and the free dynamic bodies that touch their ropes,
+/// stepped as one system: the cable indices (in order), the bodies, and
+/// the passes their closing speed asks for.
 struct Island {
     members: Vec<usize>,
+    bodies: Vec<rp::RigidBodyHandle>,
     passes: u32,
 }
 
+/// The dynamic rapier bodies no cable holds (not a cable's end, carried
+/// body, follower or rail), with colliders, that may touch a rope: each
+/// with a bound on its surface's speed (m/s).
+fn free_bodies(
+    cables: &[&mut CoupledCable],
+    bodies: &rp::RigidBodySet,
+    owns: &[Vec<rp::RigidBodyHandle>],
+    colliders: &rp::ColliderSet,
+) -> Vec<(rp::RigidBodyHandle, f64)> {
+    if cables.iter().all(|c| c.failed || c.contact.is_none()) {
+        return Vec::new();
+    }
+    let held: Vec<rp::RigidBodyHandle> = owns
+        .iter()
+        .flatten()
+        .copied()
+        .chain(cables.iter().flat_map(|c| c.all_roles().map(|(b, _)| *b)))
+        .chain(cables.iter().flat_map(|c| c.carried.iter().map(|k| k.body)))
+        .chain(cables.iter().flat_map(|c| c.followers.iter().map(|f| f.body)))
+        .collect();
+    let mut free: Vec<(rp::RigidBodyHandle, f64)> = bodies
+        .iter()
+        .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h))
+        .filter(|(_, rb)| rb.colliders().iter().any(|c| colliders.get(*c).is_some_and(|c| !c.is_sensor())))
+        .map(|(h, rb)| {
+            let extent =
+                rb.colliders().iter().filter_map(|c| colliders.get(*c)).map(|c| c.shape().compute_local_bounding_sphere().radius as f64).fold(0.0, f64::max);
+            (h, rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * extent)
+        })
+        .collect();
+    // (Rapier's arena order: the same on every run.)
+    free.sort_by_key(|(h, _)| h.into_raw_parts());
+    free
+}
+
 /// The islands of this step: the cables with contacts on that have not
-/// failed, joined by the contacts between their ropes (union–find; each
-/// island's members in cable order, islands in the order of their first
-/// member). Cables alone are not listed.
-fn cable_islands(cables: &[&mut CoupledCable], h: f64) -> Vec<Island> {
+/// failed, joined by the contacts between their ropes and by the free
+/// bodies that touch them (union–find; each island's cables in cable
+/// order, islands in the order of their first cable). A cable alone is
+/// not listed.
+fn cable_islands(
+    cables: &[&mut CoupledCable],
+    free: &[(rp::RigidBodyHandle, f64)],
+    bodies: &rp::RigidBodySet,
+    colliders: &rp::ColliderSet,
+    h: f64,
+) -> Vec<Island> {
     let candidates: Vec<usize> = (0..cables.len()).filter(|&i| !cables[i].failed && cables[i].contact.is_some()).collect();
-    if candidates.len() < 2 {
+    if candidates.is_empty() || (candidates.len() < 2 && free.is_empty()) {
         return Vec::new();
     }
     let list: Vec<(&Cable, &CableContact)> = candidates.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
-    let (pairs, approach) = contact::rope_pairs(&list, h, false);
-    let mut root: Vec<usize> = (0..candidates.len()).collect();
+    let (pairs, mut approach) = contact::rope_pairs(&list, h, false);
+    // Nodes 0.. are the candidates, then the free bodies.
+    let nodes = candidates.len() + free.len();
+    let mut root: Vec<usize> = (0..nodes).collect();
     fn find(root: &mut [usize], mut i: usize) -> usize {
         while root[i] != i {
             root[i] = root[root[i]];
@@ -1297,55 +1344,94 @@ fn cable_islands(cables: &[&mut CoupledCable], h: f64) -> Vec<Island> {
         }
         i
     }
-    for p in &pairs {
-        let (a, b) = (find(&mut root, p.cable_a), find(&mut root, p.cable_b));
+    let join = |root: &mut Vec<usize>, a: usize, b: usize| {
+        let (a, b) = (find(root, a), find(root, b));
         root[a.max(b)] = a.min(b);
+    };
+    for p in &pairs {
+        join(&mut root, p.cable_a, p.cable_b);
     }
-    let mut size = vec![0usize; candidates.len()];
-    for k in 0..candidates.len() {
+    approach.resize(nodes, 0.0);
+    for (k, &(handle, speed)) in free.iter().enumerate() {
+        let Some(rb) = bodies.get(handle) else {
+            continue;
+        };
+        let shapes = contact::BodyShapes::of(rb, colliders);
+        let (origin, rotation) = pose_of(rb);
+        for (c, (cable, settings)) in list.iter().enumerate() {
+            let (touches, closing) = contact::body_pairs(cable, settings, c, &shapes, (origin, rotation), speed, 0, FreeBody::LINK, h);
+            if !touches.is_empty() {
+                join(&mut root, c, candidates.len() + k);
+                approach[c] = approach[c].max(closing);
+                approach[candidates.len() + k] = approach[candidates.len() + k].max(closing);
+            }
+        }
+    }
+    let mut size = vec![0usize; nodes];
+    for k in 0..nodes {
         size[find(&mut root, k)] += 1;
     }
     let mut islands: Vec<Island> = Vec::new();
-    let mut slot = vec![usize::MAX; candidates.len()];
-    for k in 0..candidates.len() {
+    let mut slot = vec![usize::MAX; nodes];
+    for k in 0..nodes {
         let r = find(&mut root, k);
         if size[r] < 2 {
             continue;
         }
         if slot[r] == usize::MAX {
             slot[r] = islands.len();
-            islands.push(Island { members: Vec::new(), passes: 1 });
+            islands.push(Island { members: Vec::new(), bodies: Vec::new(), passes: 1 });
         }
         let island = &mut islands[slot[r]];
-        island.members.push(candidates[k]);
+        if k < candidates.len() {
+            island.members.push(candidates[k]);
+        } else {
+            island.bodies.push(free[k - candidates.len()].0);
+        }
         island.passes = island.passes.max(contact_passes(approach[k], h));
     }
     islands
 }
 
-/// Steps the cables `members` of `cables` (an island) together by `h`
-/// (s) in `count` contact passes of `n` sub-steps each: every pass finds
-/// each member's contacts again, and the contacts between the members'
-/// ropes, and steps them as one system ([`Cable::step_together`]). If a
-/// pass fails, the island goes back to the step's start and tries again
-/// with twice the passes, up to [`MAX_CONTACT_PASSES`]: contacts found
-/// again more often are what a step with a rope bouncing off or wrapping
-/// over another needs (Newton's own sub-steps keep the contacts of the
-/// pass's start; measured on `cable_impact.toml`, where a pendant struck
-/// a taut rope and its step after the impact, at two passes, failed at
-/// any split, and ran at four). On a last failure every member records
-/// it.
+/// A free body of an island between passes: its frame's pose and its
+/// centre of mass's and angular velocities (world).
+#[derive(Debug, Clone, Copy)]
+struct BodyPass {
+    handle: rp::RigidBodyHandle,
+    origin: DVec3,
+    rotation: DMat3,
+    velocity: DVec3,
+    angular_velocity: DVec3,
+}
+
+/// Steps the cables and free bodies of `island` together by `h` (s) in
+/// `count` contact passes of `n` sub-steps each: every pass finds each
+/// member's contacts again, the contacts between the members' ropes and
+/// between their ropes and the bodies, and steps them as one system
+/// ([`Cable::step_with_bodies`]). If a pass fails, the island goes back
+/// to the step's start and tries again with twice the passes, up to
+/// [`MAX_CONTACT_PASSES`]: contacts found again more often are what a step
+/// with a rope bouncing off or wrapping over another needs (Newton's own
+/// sub-steps keep the contacts of the pass's start; measured on
+/// `cable_impact.toml`, where a pendant struck a taut rope and its step
+/// after the impact, at two passes, failed at any split, and ran at
+/// four). On a last failure every member records it. A free body stays
+/// rapier's: the ropes' impulse on it over the step (its momentum change
+/// in the joint solve, less what gravity and its applied forces gave) is
+/// applied to it, and rapier moves it.
 #[allow(clippy::too_many_arguments)]
 fn advance_island(
     cables: &mut [&mut CoupledCable],
-    members: &[usize],
+    island: &Island,
     owns: &[Vec<rp::RigidBodyHandle>],
     contacts: &Contacts<'_>,
-    bodies: &rp::RigidBodySet,
+    bodies: &mut rp::RigidBodySet,
+    inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
     h: f64,
     count: u32,
     n: u32,
 ) {
+    let members = &island.members[..];
     let start = cables[members[0]].cable.time();
     let fail = |cables: &mut [&mut CoupledCable], t: f64, e: CableError| {
         for &i in members {
@@ -1360,6 +1446,15 @@ fn advance_island(
             }
         }
     }
+    let starts: Vec<BodyPass> = island
+        .bodies
+        .iter()
+        .filter_map(|&handle| {
+            let rb = bodies.get(handle)?;
+            let (origin, rotation) = pose_of(rb);
+            Some(BodyPass { handle, origin, rotation, velocity: rb.linvel().as_dvec3(), angular_velocity: rb.angvel().as_dvec3() })
+        })
+        .collect();
     // What a retry goes back to.
     let saved: Vec<(State, Chain, u64, StepStats, contact::FrictionMemory)> = members
         .iter()
@@ -1370,8 +1465,25 @@ fn advance_island(
         .collect();
     let mut count = count.max(1);
     loop {
-        match island_passes(cables, members, owns, contacts, bodies, h, count, n) {
-            Ok(()) => return,
+        let mut ends = starts.clone();
+        match island_passes(cables, members, &mut ends, owns, contacts, bodies, inputs, h, count, n) {
+            Ok(()) => {
+                // The ropes' impulse on each free body, to rapier.
+                let gravity = cables[members[0]].cable.model.chain.gravity;
+                for (b0, b1) in starts.iter().zip(&ends) {
+                    let input = inputs(b0.handle);
+                    let Some(rb) = bodies.get_mut(b0.handle) else {
+                        continue;
+                    };
+                    let body = lumped_of(rb);
+                    let world = |r: DMat3| r * body.inertia * r.transpose();
+                    let push = (b1.velocity - b0.velocity) * body.mass - (gravity * (body.mass * input.gravity_scale) + input.force) * h;
+                    let turn = world(b1.rotation) * b1.angular_velocity - world(b0.rotation) * b0.angular_velocity - input.torque * h;
+                    rb.apply_impulse(push.as_vec3(), true);
+                    rb.apply_torque_impulse(turn.as_vec3(), true);
+                }
+                return;
+            }
             Err(_) if count < MAX_CONTACT_PASSES => {
                 for (&i, (state, chain, steps, stats, friction)) in members.iter().zip(&saved) {
                     let cc = &mut *cables[i];
@@ -1388,21 +1500,25 @@ fn advance_island(
     }
 }
 
-/// [`advance_island`]'s passes: `count` of them, `n` sub-steps each; the
-/// time and error of a failure.
+/// [`advance_island`]'s passes: `count` of them, `n` sub-steps each, the
+/// free bodies from `free` (their state at the step's start, moved on to
+/// the step's end); the time and error of a failure.
 #[allow(clippy::too_many_arguments)]
 fn island_passes(
     cables: &mut [&mut CoupledCable],
     members: &[usize],
+    free: &mut [BodyPass],
     owns: &[Vec<rp::RigidBodyHandle>],
     contacts: &Contacts<'_>,
     bodies: &rp::RigidBodySet,
+    inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
     h: f64,
     count: u32,
     n: u32,
 ) -> Result<(), (f64, CableError)> {
     let start = cables[members[0]].cable.time();
     let hp = h / count as f64;
+    let gravity = cables[members[0]].cable.model.chain.gravity;
     for k in 0..count {
         for &i in members {
             let cc = &mut *cables[i];
@@ -1410,9 +1526,41 @@ fn island_passes(
                 find_contacts(cc, &settings, contacts, bodies, &owns[i], hp, start);
             }
         }
+        let t = cables[members[0]].cable.time();
         let list: Vec<(&Cable, &CableContact)> = members.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
-        let pairs: Vec<ForestPair> = contact::rope_pairs(&list, hp, false)
-            .0
+        let mut found = contact::rope_pairs(&list, hp, false).0;
+        // The free bodies at the pass's start, as chains of their own.
+        let mut chains: Vec<FreeBody> = Vec::with_capacity(free.len());
+        for (b, body) in free.iter().enumerate() {
+            let Some(rb) = bodies.get(body.handle) else {
+                continue;
+            };
+            let input = inputs(body.handle);
+            let lumped = lumped_of(rb);
+            let chain = FreeBody::new(
+                lumped.mass,
+                lumped.com,
+                lumped.inertia,
+                body.origin,
+                body.rotation,
+                body.velocity,
+                body.angular_velocity,
+                gravity * input.gravity_scale,
+                input.force,
+                input.torque,
+                t,
+            )
+            .map_err(|source| (t, CableError::Integrate(crate::integrate::IntegrateError::System { t, source })))?;
+            let shapes = contact::BodyShapes::of(rb, contacts.colliders);
+            let extent = shapes.colliders.iter().map(|(c, _, _)| c.shape().compute_local_bounding_sphere().radius as f64).fold(0.0, f64::max);
+            let speed = body.velocity.length() + body.angular_velocity.length() * extent;
+            for (c, (cable, settings)) in list.iter().enumerate() {
+                let (pairs, _) = contact::body_pairs(cable, settings, c, &shapes, (body.origin, body.rotation), speed, list.len() + b, FreeBody::LINK, hp);
+                found.extend(pairs);
+            }
+            chains.push(chain);
+        }
+        let pairs: Vec<ForestPair> = found
             .into_iter()
             .map(|p| ForestPair {
                 chain_a: p.cable_a,
@@ -1428,7 +1576,12 @@ fn island_passes(
         for _ in 0..n {
             let t = cables[members[0]].cable.time();
             let mut group: Vec<&mut Cable> = cables.iter_mut().enumerate().filter(|(i, _)| members.contains(i)).map(|(_, c)| &mut c.cable).collect();
-            Cable::step_together(&mut group, pairs.clone(), hs).map_err(|e| (t, e))?;
+            let mut moving: Vec<&mut FreeBody> = chains.iter_mut().collect();
+            Cable::step_with_bodies(&mut group, &mut moving, pairs.clone(), hs).map_err(|e| (t, e))?;
+        }
+        for (body, chain) in free.iter_mut().zip(&chains) {
+            let ((origin, rotation), (velocity, angular_velocity)) = (chain.pose(), chain.velocity());
+            *body = BodyPass { handle: body.handle, origin, rotation, velocity, angular_velocity };
         }
         if k + 1 < count {
             for &i in members {

@@ -448,3 +448,93 @@ impl Chain {
         self.external.clear();
     }
 }
+
+/// A free rigid body as a chain of its own, for a step of a [`Forest`] with
+/// ropes it touches (a dynamic body another engine owns, its inertia in the
+/// ropes' solve for that step): a base at rest at the body's pose at the
+/// step's start, three slides along the body's axes and three turns (about
+/// z, y, x), the last link carrying its mass. Its coordinates are zero at
+/// the start; the slides' and turns' rates are the body's velocity there.
+#[derive(Debug, Clone)]
+pub struct FreeBody {
+    /// The chain (six sub-joints; the body is the last link).
+    pub chain: Chain,
+    /// Its state.
+    pub state: crate::integrate::State,
+    /// Centre of mass in the body frame, m.
+    pub com: DVec3,
+    /// Mass, kg.
+    pub mass: f64,
+}
+
+impl FreeBody {
+    /// Sub-joint whose link is the body.
+    pub const LINK: usize = 5;
+
+    /// A body of `mass` (kg, > 0) with its centre of mass at `com` and its
+    /// inertia `inertia` about it (kg·m²), both in its frame, whose frame
+    /// is at `origin` (m) turned by `rotation`, moving with its centre of
+    /// mass at `velocity` (m/s) and turning at `angular_velocity` (rad/s),
+    /// under `gravity` (m/s²) and the constant `force` (N, at the centre
+    /// of mass) and `torque` (N·m), at time `t` (s).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        mass: f64,
+        com: DVec3,
+        inertia: DMat3,
+        origin: DVec3,
+        rotation: DMat3,
+        velocity: DVec3,
+        angular_velocity: DVec3,
+        gravity: DVec3,
+        force: DVec3,
+        torque: DVec3,
+        t: f64,
+    ) -> Result<Self, SystemError> {
+        use super::parts::{BaseMotion, BaseState, JointKind, LinkMass, SubJoint};
+        if !(mass > 0.0 && mass.is_finite()) {
+            return Err(SystemError::Model(format!("a free body needs a positive mass, not {mass} kg")));
+        }
+        let joint = |kind, axis| SubJoint::free(kind, axis);
+        let mut joints = vec![
+            joint(JointKind::Prismatic, DVec3::X),
+            joint(JointKind::Prismatic, DVec3::Y),
+            joint(JointKind::Prismatic, DVec3::Z),
+            joint(JointKind::Revolute, DVec3::Z),
+            joint(JointKind::Revolute, DVec3::Y),
+            joint(JointKind::Revolute, DVec3::X),
+        ];
+        joints[Self::LINK].link = Some(LinkMass::new(mass, com, inertia));
+        let mut chain = Chain::new(joints, BaseMotion::Fixed(BaseState::fixed(rotation, origin)), gravity, origin);
+        if force != DVec3::ZERO || torque != DVec3::ZERO {
+            chain.loads_mut().push(super::parts::LinkLoad { link: Self::LINK, force, local_point: com, moment: torque });
+        }
+        // The frame origin's velocity, in the body's axes; the turns' rates
+        // (about z, y, x at zero angles: the angular velocity's components).
+        let w = rotation.transpose() * angular_velocity;
+        let v0 = rotation.transpose() * (velocity - angular_velocity.cross(rotation * com));
+        let v = vec![v0.x, v0.y, v0.z, w.z, w.y, w.x];
+        let state = crate::integrate::State::new(&mut chain, t, vec![0.0; 6], v).map_err(|e| SystemError::Model(e.to_string()))?;
+        Ok(FreeBody { chain, state, com, mass })
+    }
+
+    /// Evaluates the chain at its state (the queries read it).
+    pub fn refresh(&mut self) {
+        let mut r = [0.0; 6];
+        let s = &self.state;
+        let _ = self.chain.residual_into(s.t, &s.q, &s.v, &s.a, &mut r);
+    }
+
+    /// The body's frame origin (m) and orientation now.
+    pub fn pose(&self) -> (DVec3, DMat3) {
+        let rot = self.chain.link_rotation(Self::LINK).unwrap_or(DMat3::IDENTITY);
+        (self.chain.link_point(Self::LINK, DVec3::ZERO).unwrap_or(DVec3::ZERO), rot)
+    }
+
+    /// Its centre of mass's velocity (m/s) and its angular velocity
+    /// (rad/s) now.
+    pub fn velocity(&self) -> (DVec3, DVec3) {
+        let v = self.chain.link_point_velocity(Self::LINK, self.com).unwrap_or(DVec3::ZERO);
+        (v, self.chain.link_velocity(Self::LINK).map_or(DVec3::ZERO, |m| m.top))
+    }
+}

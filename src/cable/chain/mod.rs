@@ -25,7 +25,7 @@ mod parts;
 mod sweep;
 
 pub(crate) use forest::ExternalPoint;
-pub use forest::{Forest, ForestPair};
+pub use forest::{Forest, ForestPair, FreeBody};
 
 pub use nonsmooth::StaticError;
 pub use parts::*;

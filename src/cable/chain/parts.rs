@@ -106,6 +106,12 @@ pub enum SpringLaw {
 }
 
 impl SubJoint {
+    /// A sub-joint with no spring, no damper and no mass, about or along
+    /// `axis` (unit) of its parent's frame: a free body's slide or turn.
+    pub fn free(kind: JointKind, axis: DVec3) -> Self {
+        SubJoint { kind, axis, offset: DVec3::ZERO, pre_rotation: DMat3::IDENTITY, stiffness: 0.0, damping: 0.0, rest: 0.0, link: None, law: SpringLaw::Linear }
+    }
+
     /// The spring + damper force at extension `q − rest` and rate `v`, and
     /// its tangents `(f, ∂f/∂q, ∂f/∂v)` (N or N·m; N/m or N·m/rad; N·s/m or
     /// N·m·s/rad).

@@ -1,0 +1,66 @@
+//! Dynamic rapier bodies against ropes (issue 12): a body no cable holds
+//! that touches a rope is a free body of the rope's implicit step for that
+//! step (a one-link chain of the same `Forest`, its contacts with the
+//! rope pair elements), and the ropes' impulse on it goes to rapier.
+//! Before, a dynamic body passed through every rope.
+#![cfg(feature = "sim")]
+
+#[path = "common/scenario_run.rs"]
+mod scenario_run;
+use scenario_run::run_shipped_variant;
+
+/// `ball_on_rope.toml`: a 20 kg ball dropped 0.5 m onto a taut 16 mm
+/// rope. Rows: t, ball y, ball vy, rope middle y, rope contact force,
+/// system energy.
+fn ball_on_rope(mass: &str) -> Vec<Vec<f64>> {
+    run_shipped_variant("ball_on_rope", "mass = 20.0", &format!("mass = {mass}"))
+}
+
+/// The ball strikes the rope at 2.9 m/s and does not pass through it: its
+/// centre never comes nearer the rope's centreline (at the middle, under
+/// it) than the two radii, 0.108 m, less 1 mm. It bounces (up at more than
+/// 1 m/s), and comes to rest on the rope: over the last second it sits the
+/// two radii above the rope's middle (less 1 mm, or up to 3 mm more: the
+/// taut rope wraps the ball in a shallow V, its apex hanging just under
+/// the ball's lowest point, 1.2 mm here) and the contact force on
+/// the rope is at least its weight, and at most its weight over cos 30°
+/// (the contacts' normals point at the ball's centre from the points of
+/// the rope it rests on). From just before the strike on, the system's
+/// energy never grows (1e-3) and the strike takes some of it.
+#[test]
+fn a_ball_dropped_on_a_taut_rope_bounces_and_rests_on_it() {
+    let rows = ball_on_rope("20.0");
+    let (radii, weight) = (0.1 + 0.008, 20.0 * 9.81);
+    let gap = |r: &Vec<f64>| r[1] - r[3];
+    let nearest = rows.iter().map(gap).fold(f64::INFINITY, f64::min);
+    let strike = rows.iter().map(|r| -r[2]).fold(0.0f64, f64::max);
+    let bounce = rows.iter().filter(|r| r[0] > 0.3).map(|r| r[2]).fold(0.0f64, f64::max);
+    let late: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] > 2.0).collect();
+    let mean = |k: usize| late.iter().map(|r| r[k]).sum::<f64>() / late.len() as f64;
+    let rest_gap = late.iter().map(|r| gap(r)).sum::<f64>() / late.len() as f64;
+    let e0 = rows.iter().rfind(|r| r[0] <= 0.3 + 1e-9).unwrap()[5];
+    let most = rows.iter().filter(|r| r[0] > 0.3).map(|r| r[5]).fold(f64::NEG_INFINITY, f64::max);
+    let last = rows.last().unwrap()[5];
+    eprintln!(
+        "ball on rope: strike {strike:.3} m/s, nearest {nearest:.5} m, bounce {bounce:.3} m/s, resting gap {rest_gap:.5} m, contact {:.1} N (weight {weight:.1}), energy {e0:.2} -> max {most:.2}, last {last:.2} J",
+        mean(4)
+    );
+    assert!(strike > 2.5, "the ball should strike fast: {strike} m/s");
+    assert!(nearest > radii - 1e-3, "the ball went into the rope: centre {nearest} m from its centreline");
+    assert!(bounce > 1.0, "the ball should bounce: {bounce} m/s up");
+    assert!(rest_gap > radii - 1e-3 && rest_gap < radii + 3e-3, "the ball should rest on the rope: {rest_gap} m above it");
+    assert!(mean(4) >= weight && mean(4) <= weight / 30f64.to_radians().cos(), "resting contact {} N for a weight of {weight} N", mean(4));
+    assert!(most < e0 * (1.0 + 1e-3) && last < e0, "energy {e0} J before the strike, at most {most} J after, {last} J at the end");
+}
+
+/// A heavier ball (200 kg) at the same speed: the rope gives way further,
+/// still never lets it through, and holds it.
+#[test]
+fn a_heavy_ball_is_held_by_the_rope() {
+    let rows = ball_on_rope("200.0");
+    let nearest = rows.iter().map(|r| r[1] - r[3]).fold(f64::INFINITY, f64::min);
+    let lowest = rows.iter().map(|r| r[1]).fold(f64::INFINITY, f64::min);
+    eprintln!("heavy ball: nearest {nearest:.5} m, lowest centre {lowest:.4} m");
+    assert!(nearest > 0.108 - 1e-3, "the heavy ball went into the rope: {nearest} m");
+    assert!(lowest > 0.5, "the heavy ball fell through the rope: its centre at {lowest} m");
+}
