@@ -961,11 +961,19 @@ pub(crate) fn body_pairs(
         let element_length = view.layout().element_length;
         let n = nodes.len().saturating_sub(1);
         let (held_first, held_last) = held_ends(cable, &view);
+        // The whole rope's box, padded by the farthest reach: most bodies
+        // are nowhere near a rope.
+        let fastest = velocities.iter().map(|v| v.length()).fold(0.0, f64::max);
+        let pad = DVec3::splat(radius + 2.0 * h * (fastest + speed) + h * h * gravity);
+        let (rope_lo, rope_hi) = nodes.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, u), p| (l.min(*p), u.max(*p)));
         for &(collider, lt, lr) in &body.colliders {
             let (co, cr) = (origin + rotation * lt, rotation * lr);
             let pose = rp::Pose::from_parts(co.as_vec3(), glam::DQuat::from_mat3(&cr).normalize().as_quat());
             let aabb = collider.shape().compute_aabb(&pose);
             let (lo, hi) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
+            if (rope_lo - pad).cmpgt(hi).any() || (rope_hi + pad).cmplt(lo).any() {
+                continue;
+            }
             for k in (0..=n).filter(|&k| !((k == 0 && held_first) || (k == n && held_last))) {
                 let reach = radius + 2.0 * h * (velocities[k].length() + speed) + h * h * gravity;
                 let p = nodes[k];
