@@ -1530,11 +1530,13 @@ fn island_passes(
         let list: Vec<(&Cable, &CableContact)> = members.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
         let mut found = contact::rope_pairs(&list, hp, false).0;
         // The free bodies at the pass's start, as chains of their own.
-        let mut chains: Vec<FreeBody> = Vec::with_capacity(free.len());
+        // (A body rapier no longer has keeps its state and gets no chain.)
+        let mut chains: Vec<(usize, FreeBody)> = Vec::with_capacity(free.len());
         for (b, body) in free.iter().enumerate() {
             let Some(rb) = bodies.get(body.handle) else {
                 continue;
             };
+            let index = list.len() + chains.len();
             let input = inputs(body.handle);
             let lumped = lumped_of(rb);
             let chain = FreeBody::new(
@@ -1555,10 +1557,10 @@ fn island_passes(
             let extent = shapes.colliders.iter().map(|(c, _, _)| c.shape().compute_local_bounding_sphere().radius as f64).fold(0.0, f64::max);
             let speed = body.velocity.length() + body.angular_velocity.length() * extent;
             for (c, (cable, settings)) in list.iter().enumerate() {
-                let (pairs, _) = contact::body_pairs(cable, settings, c, &shapes, (body.origin, body.rotation), speed, list.len() + b, FreeBody::LINK, hp);
+                let (pairs, _) = contact::body_pairs(cable, settings, c, &shapes, (body.origin, body.rotation), speed, index, FreeBody::LINK, hp);
                 found.extend(pairs);
             }
-            chains.push(chain);
+            chains.push((b, chain));
         }
         let pairs: Vec<ForestPair> = found
             .into_iter()
@@ -1576,12 +1578,12 @@ fn island_passes(
         for _ in 0..n {
             let t = cables[members[0]].cable.time();
             let mut group: Vec<&mut Cable> = cables.iter_mut().enumerate().filter(|(i, _)| members.contains(i)).map(|(_, c)| &mut c.cable).collect();
-            let mut moving: Vec<&mut FreeBody> = chains.iter_mut().collect();
+            let mut moving: Vec<&mut FreeBody> = chains.iter_mut().map(|(_, c)| c).collect();
             Cable::step_with_bodies(&mut group, &mut moving, pairs.clone(), hs).map_err(|e| (t, e))?;
         }
-        for (body, chain) in free.iter_mut().zip(&chains) {
+        for (b, chain) in &chains {
             let ((origin, rotation), (velocity, angular_velocity)) = (chain.pose(), chain.velocity());
-            *body = BodyPass { handle: body.handle, origin, rotation, velocity, angular_velocity };
+            free[*b] = BodyPass { handle: free[*b].handle, origin, rotation, velocity, angular_velocity };
         }
         if k + 1 < count {
             for &i in members {
