@@ -11,7 +11,7 @@ use scenario_run::run_shipped_variant;
 
 /// `ball_on_rope.toml`: a 20 kg ball dropped 0.5 m onto a taut 16 mm
 /// rope. Rows: t, ball y, ball vy, rope middle y, rope contact force,
-/// system energy.
+/// system energy, the ropes' force on the ball (y).
 fn ball_on_rope(mass: &str) -> Vec<Vec<f64>> {
     run_shipped_variant("ball_on_rope", "mass = 20.0", &format!("mass = {mass}"))
 }
@@ -25,7 +25,9 @@ fn ball_on_rope(mass: &str) -> Vec<Vec<f64>> {
 /// the ball's lowest point, 1.2 mm here) and the contact force on
 /// the rope is at least its weight, and at most its weight over cos 30°
 /// (the contacts' normals point at the ball's centre from the points of
-/// the rope it rests on). From just before the strike on, the system's
+/// the rope it rests on), and the ropes' force on the ball (its own
+/// `contact_force` probe) averages its weight to 1 %. From just before
+/// the strike on, the system's
 /// energy never grows (1e-3) and the strike takes some of it.
 #[test]
 fn a_ball_dropped_on_a_taut_rope_bounces_and_rests_on_it() {
@@ -42,14 +44,18 @@ fn a_ball_dropped_on_a_taut_rope_bounces_and_rests_on_it() {
     let most = rows.iter().filter(|r| r[0] > 0.3).map(|r| r[5]).fold(f64::NEG_INFINITY, f64::max);
     let last = rows.last().unwrap()[5];
     eprintln!(
-        "ball on rope: strike {strike:.3} m/s, nearest {nearest:.5} m, bounce {bounce:.3} m/s, resting gap {rest_gap:.5} m, contact {:.1} N (weight {weight:.1}), energy {e0:.2} -> max {most:.2}, last {last:.2} J",
-        mean(4)
+        "ball on rope: strike {strike:.3} m/s, nearest {nearest:.5} m, bounce {bounce:.3} m/s, resting gap {rest_gap:.5} m, contact {:.1} N, on the ball {:.2} N (weight {weight:.1}), energy {e0:.2} -> max {most:.2}, last {last:.2} J",
+        mean(4),
+        mean(6)
     );
     assert!(strike > 2.5, "the ball should strike fast: {strike} m/s");
     assert!(nearest > radii - 1e-3, "the ball went into the rope: centre {nearest} m from its centreline");
     assert!(bounce > 1.0, "the ball should bounce: {bounce} m/s up");
     assert!(rest_gap > radii - 1e-3 && rest_gap < radii + 3e-3, "the ball should rest on the rope: {rest_gap} m above it");
     assert!(mean(4) >= weight && mean(4) <= weight / 30f64.to_radians().cos(), "resting contact {} N for a weight of {weight} N", mean(4));
+    // The ropes' force on the resting ball (its `contact_force` probe, the
+    // mean over each step) carries its weight.
+    assert!((mean(6) - weight).abs() < 1e-2 * weight, "the ropes hold the ball with {} N, its weight {weight} N", mean(6));
     assert!(most < e0 * (1.0 + 1e-3) && last < e0, "energy {e0} J before the strike, at most {most} J after, {last} J at the end");
 }
 

@@ -363,6 +363,10 @@ pub struct CoupledCable {
     /// fixed or kinematic colliders (then rapier's impulse from those is
     /// not applied again, see [`after_rapier`]).
     body_contacts: bool,
+    /// The mean force (N, world) the island's ropes put on each free body
+    /// over the last step (on the island's first cable; see
+    /// [`CoupledCable::contact_force_on`]).
+    free_forces: Vec<(rp::RigidBodyHandle, DVec3)>,
     /// Stopped after a failed step.
     pub failed: bool,
     /// The failure of this step's advance (time of the failing sub-step),
@@ -374,13 +378,17 @@ impl CoupledCable {
     /// The force (N, world; normal and friction) of this cable's contacts
     /// on rapier body `body` now: its ropes pressing on the body's
     /// colliders, and, if the chain carries it, its own colliders' touch
-    /// points on fixed and kinematic colliders. Rapier's own contacts
-    /// (with dynamic bodies) are not counted.
+    /// points on fixed and kinematic colliders; for a free dynamic body
+    /// the ropes touched (one no cable holds), the mean force of the ropes
+    /// of this cable's island on it over the last step (counted on the
+    /// island's first cable). Rapier's own contacts (with dynamic bodies)
+    /// are not counted.
     pub fn contact_force_on(&self, body: rp::RigidBodyHandle) -> DVec3 {
         let ch = &self.cable.model.chain;
         let t = self.cable.time();
         let forces = ch.forces().iter().zip(ch.force_element_points()).skip(self.fixed_forces).map(|(f, at)| f.element.wrench(t, &at).force);
-        self.friction.force_on(body, forces)
+        let free = self.free_forces.iter().filter(|(b, _)| *b == body).fold(DVec3::ZERO, |s, (_, f)| s + *f);
+        self.friction.force_on(body, forces) + free
     }
 
     /// The role of `body` in this cable, if it is attached.
@@ -997,6 +1005,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         friction: contact::FrictionMemory::default(),
         body_contacts: false,
         failed: false,
+        free_forces: Vec::new(),
         advance_failure: None,
     })
 }
@@ -1065,6 +1074,9 @@ pub fn step_cables(
     // 2. Carried bodies: impulses and loads; step the cables.
     let n = substeps.max(1);
     let mut failures = Vec::new();
+    for cc in cables.iter_mut() {
+        cc.free_forces.clear();
+    }
     for cc in cables.iter_mut().filter(|c| !c.failed) {
         cc.cable.model.chain.loads_mut().truncate(cc.fixed_loads);
         // Rapier may have re-read the user's joint motor and body settings.
@@ -1481,6 +1493,7 @@ fn advance_island(
                     let turn = world(b1.rotation) * b1.angular_velocity - world(b0.rotation) * b0.angular_velocity - input.torque * h;
                     rb.apply_impulse(push.as_vec3(), true);
                     rb.apply_torque_impulse(turn.as_vec3(), true);
+                    cables[members[0]].free_forces.push((b0.handle, push / h));
                 }
                 return;
             }
