@@ -199,6 +199,7 @@ impl Cable {
         let join = |f: fn(&State) -> &Vec<f64>| states.iter().flat_map(|s| f(s).iter().copied()).collect::<Vec<f64>>();
         let mut state = State { t, q: join(|s| &s.q), v: join(|s| &s.v), a: join(|s| &s.a), a_hat: join(|s| &s.a_hat) };
         let saved: Vec<State> = cables.iter().map(|c| c.state.clone()).collect();
+        let saved_bodies: Vec<State> = bodies.iter().map(|b| b.state.clone()).collect();
         let result = {
             let chains: Vec<&mut Chain> = cables.iter_mut().map(|c| &mut c.model.chain).chain(bodies.iter_mut().map(|b| &mut b.chain)).collect();
             Forest::new(chains, pairs)
@@ -231,6 +232,10 @@ impl Cable {
         }
         if let Some(e) = cables.iter().find_map(|c| c.check_sanity().err()) {
             restore(cables);
+            for (b, s) in bodies.iter_mut().zip(saved_bodies) {
+                b.state = s;
+                b.refresh();
+            }
             return Err(e);
         }
         for c in cables.iter_mut() {

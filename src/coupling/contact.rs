@@ -461,16 +461,7 @@ pub(crate) fn add_contacts(
                 else {
                     continue;
                 };
-                let (mut lo, mut hi) = (best - 0.25, best + 0.25);
-                for _ in 0..24 {
-                    let (m1, m2) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
-                    if dist(m1) <= dist(m2) {
-                        hi = m2;
-                    } else {
-                        lo = m1;
-                    }
-                }
-                let f = 0.5 * (lo + hi);
+                let f = convex_min(dist, best - 0.25, best + 0.25, 24);
                 let d = dist(f);
                 if f > 0.02 && f < 0.98 && d < ends - 1e-3 * radius && d - radius <= reach(i) {
                     let f = memory.fraction(site(2 * i + 1), f);
@@ -644,6 +635,20 @@ struct Segment {
     /// The arc lengths (m) from the rope's start within which a touch is
     /// left out (a held end's neighbourhood), and from which on again.
     free: (f64, f64),
+}
+
+/// The minimum of `f`, convex on `[lo, hi]`, by `iterations` steps of a
+/// ternary search: the middle of the last bracket.
+fn convex_min(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, iterations: usize) -> f64 {
+    for _ in 0..iterations {
+        let (m1, m2) = (lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0);
+        if f(m1) <= f(m2) {
+            hi = m2;
+        } else {
+            lo = m1;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// The parameter `t` in [0, 1] of the point of the segment `a + t (b − a)`
@@ -910,6 +915,13 @@ pub(crate) struct BodyShapes<'a> {
     pub colliders: Vec<(&'a rp::Collider, DVec3, DMat3)>,
 }
 
+/// The radius (m) of the largest of the bounding spheres, about their own
+/// centres, of `rb`'s colliders (sensors too): with its angular speed, a
+/// bound on how fast its surface moves.
+pub(crate) fn body_extent(rb: &rp::RigidBody, colliders: &rp::ColliderSet) -> f64 {
+    rb.colliders().iter().filter_map(|c| colliders.get(*c)).map(|c| c.shape().compute_local_bounding_sphere().radius as f64).fold(0.0, f64::max)
+}
+
 impl<'a> BodyShapes<'a> {
     /// The non-sensor colliders of `rb`.
     pub fn of(rb: &rp::RigidBody, colliders: &'a rp::ColliderSet) -> Self {
@@ -1004,16 +1016,7 @@ pub(crate) fn body_pairs(
                     continue;
                 }
                 let dist = |f: f64| nearest(collider.shape(), a.lerp(b, f)).map_or(f64::INFINITY, |hit| hit.2);
-                let (mut l, mut r) = (0.0, 1.0);
-                for _ in 0..30 {
-                    let (m1, m2) = (l + (r - l) / 3.0, r - (r - l) / 3.0);
-                    if dist(m1) <= dist(m2) {
-                        r = m2;
-                    } else {
-                        l = m1;
-                    }
-                }
-                let f = 0.5 * (l + r);
+                let f = convex_min(dist, 0.0, 1.0, 30);
                 let d = dist(f);
                 if !(f > 1e-3 && f < 1.0 - 1e-3 && d < dist(0.0).min(dist(1.0)) - 1e-3 * radius && d - radius <= reach) {
                     continue;

@@ -1317,11 +1317,7 @@ fn free_bodies(
         .iter()
         .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h))
         .filter(|(_, rb)| rb.colliders().iter().any(|c| colliders.get(*c).is_some_and(|c| !c.is_sensor())))
-        .map(|(h, rb)| {
-            let extent =
-                rb.colliders().iter().filter_map(|c| colliders.get(*c)).map(|c| c.shape().compute_local_bounding_sphere().radius as f64).fold(0.0, f64::max);
-            (h, rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * extent)
-        })
+        .map(|(h, rb)| (h, rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * contact::body_extent(rb, colliders)))
         .collect();
     // (Rapier's arena order: the same on every run.)
     free.sort_by_key(|(h, _)| h.into_raw_parts());
@@ -1567,8 +1563,7 @@ fn island_passes(
             )
             .map_err(|source| (t, CableError::Integrate(crate::integrate::IntegrateError::System { t, source })))?;
             let shapes = contact::BodyShapes::of(rb, contacts.colliders);
-            let extent = shapes.colliders.iter().map(|(c, _, _)| c.shape().compute_local_bounding_sphere().radius as f64).fold(0.0, f64::max);
-            let speed = body.velocity.length() + body.angular_velocity.length() * extent;
+            let speed = body.velocity.length() + body.angular_velocity.length() * contact::body_extent(rb, contacts.colliders);
             for (c, (cable, settings)) in list.iter().enumerate() {
                 let (pairs, _) = contact::body_pairs(cable, settings, c, &shapes, (body.origin, body.rotation), speed, index, FreeBody::LINK, hp);
                 found.extend(pairs);

@@ -221,6 +221,17 @@ pub(crate) fn loop_correction(chains: &mut [(&mut Chain, &mut [f64])], pairs: &[
     Ok(())
 }
 
+/// `x` cut into the parts `offsets[k]..offsets[k + 1]`.
+fn split_parts<'x>(offsets: &[usize], mut x: &'x mut [f64]) -> Vec<&'x mut [f64]> {
+    let mut parts = Vec::with_capacity(offsets.len().saturating_sub(1));
+    for w in offsets.windows(2) {
+        let (head, tail) = x.split_at_mut(w[1] - w[0]);
+        parts.push(head);
+        x = tail;
+    }
+    parts
+}
+
 /// Several [`Chain`]s stepped as one [`SecondOrderSystem`], coupled by
 /// [`ForestPair`]s: its coordinates are the chains' in order. Each chain
 /// keeps its own O(n) sweep; each pair's points get their own tangents on
@@ -290,17 +301,6 @@ impl<'a> Forest<'a> {
         self.offsets[k]..self.offsets[k + 1]
     }
 
-    /// `x` cut into the chains' parts.
-    fn split<'x>(&self, mut x: &'x mut [f64]) -> Vec<&'x mut [f64]> {
-        let mut parts = Vec::with_capacity(self.chains.len());
-        for k in 0..self.chains.len() {
-            let (head, tail) = x.split_at_mut(self.offsets[k + 1] - self.offsets[k]);
-            parts.push(head);
-            x = tail;
-        }
-        parts
-    }
-
     /// Kinematics of every chain, the cross pairs' wrenches on their
     /// points, then every chain's loads and tip-to-base sweep (`solve`: with
     /// its elimination).
@@ -330,12 +330,8 @@ impl<'a> Forest<'a> {
                 normal: w.normal,
             });
         }
-        let offsets = self.offsets.clone();
-        let mut rest = r;
-        for (k, chain) in self.chains.iter_mut().enumerate() {
-            let (head, tail) = rest.split_at_mut(offsets[k + 1] - offsets[k]);
-            chain.sweep_loads(t, head, solve)?;
-            rest = tail;
+        for (chain, rk) in self.chains.iter_mut().zip(split_parts(&self.offsets, r)) {
+            chain.sweep_loads(t, rk, solve)?;
         }
         Ok(())
     }
@@ -348,7 +344,7 @@ impl<'a> Forest<'a> {
             pairs.extend(c.pair_scratch.iter().map(|p| LoopPair::within(k, p)));
         }
         pairs.extend_from_slice(&self.loops);
-        let xs = self.split(x);
+        let xs = split_parts(&self.offsets, x);
         let mut parts: Vec<(&mut Chain, &mut [f64])> = self.chains.iter_mut().map(|c| &mut **c).zip(xs).collect();
         loop_correction(&mut parts, &pairs, c_v, c_q)
     }
@@ -362,9 +358,8 @@ impl SecondOrderSystem for Forest<'_> {
         self.evaluate(t, q, v, a, r, None)
     }
     fn solve_tangent(&mut self, _t: f64, _q: &[f64], _v: &[f64], _a: &[f64], c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
-        let offsets = self.offsets.clone();
-        for (k, xk) in self.split(x).into_iter().enumerate() {
-            self.chains[k].solve_tree(c_v, c_q, &b[offsets[k]..offsets[k + 1]], xk)?;
+        for ((chain, w), xk) in self.chains.iter_mut().zip(self.offsets.windows(2)).zip(split_parts(&self.offsets, x)) {
+            chain.solve_tree(c_v, c_q, &b[w[0]..w[1]], xk)?;
         }
         self.correct(c_v, c_q, x)
     }
@@ -380,8 +375,8 @@ impl SecondOrderSystem for Forest<'_> {
         x: &mut [f64],
     ) -> Result<(), SystemError> {
         self.evaluate(t, q, v, a, rhs, Some((c_v, c_q)))?;
-        for (k, xk) in self.split(x).into_iter().enumerate() {
-            self.chains[k].forward_solve(xk);
+        for (chain, xk) in self.chains.iter_mut().zip(split_parts(&self.offsets, x)) {
+            chain.forward_solve(xk);
         }
         self.correct(c_v, c_q, x)
     }
@@ -419,11 +414,10 @@ impl SecondOrderSystem for Forest<'_> {
         !self.pairs.is_empty() || self.chains.iter().any(|c| c.patient_newton())
     }
     fn nonlinear_update(&mut self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) -> bool {
-        let offsets = self.offsets.clone();
         let mut any = false;
-        for (k, ok) in self.split(out).into_iter().enumerate() {
-            let rg = offsets[k]..offsets[k + 1];
-            if self.chains[k].nonlinear_update(&q[rg.clone()], &dx[rg.clone()], scale, ok) {
+        for ((chain, w), ok) in self.chains.iter_mut().zip(self.offsets.windows(2)).zip(split_parts(&self.offsets, out)) {
+            let rg = w[0]..w[1];
+            if chain.nonlinear_update(&q[rg.clone()], &dx[rg.clone()], scale, ok) {
                 any = true;
             } else {
                 for ((o, qi), di) in ok.iter_mut().zip(&q[rg.clone()]).zip(&dx[rg]) {
