@@ -102,3 +102,99 @@ fn a_pendant_swinging_into_a_taut_rope_strikes_it_and_does_not_pass_through() {
     assert!(nearest > diameter - 1e-3, "the pendant went into the span: {nearest} m from its centreline");
     assert!(most < e0 * (1.0 + 1e-3), "the energy grew from {e0} J to {most} J");
 }
+
+/// A rope lying across two rails on a slope: two 20 mm steel ropes 12 m
+/// long pinned at both ends along the fall line of a frictionless fixed
+/// slope (0.6 m apart, resting on it), and a free 1.2 m rope of the same
+/// kind let go 1 mm above them, across them (horizontal). Rope-on-rope
+/// friction `mu` on all three cables (combined as rapier's `Average`:
+/// `mu`). Rows: t, then the free rope's middle (x, y, z).
+fn rope_on_rails(degrees: f64, mu: f64) -> Vec<Vec<f64>> {
+    let t = degrees.to_radians();
+    // Slope frame: d up the fall line, n out of the face.
+    let (d, n) = ([t.cos(), t.sin()], [-t.sin(), t.cos()]);
+    let at = |along: f64, up: f64| [along * d[0] + up * n[0], along * d[1] + up * n[1]];
+    let r = 0.010;
+    let rail = |z: f64| {
+        let (a, b) = (at(-6.0, r), at(6.0, r));
+        format!(
+            "[[cable]]\nname = \"rail{z}\"\nlength = 12.0\nsegments = 120\ndiameter = 0.020\nmaterial = \"steel_wire_rope_6x36_iwrc\"\ndamping = 0.01\nfriction = {mu}\nstart = {{ world = [{}, {}, {z}] }}\nend = {{ world = [{}, {}, {z}] }}\npath = [[{}, {}, {z}], [{}, {}, {z}]]\n\n",
+            a[0], a[1], b[0], b[1], a[0], a[1], b[0], b[1]
+        )
+    };
+    let top = at(0.0, 3.0 * r + 0.001);
+    let source = format!(
+        r#"[simulation]
+duration = 2.0
+dt = 0.016666666666666666
+
+[[body]]
+name = "slope"
+type = "fixed"
+shape = "cuboid"
+half_extents = [20.0, 0.5, 5.0]
+position = [{px}, {py}, 0.0]
+rotation = [0.0, 0.0, {degrees}]
+friction = 0.0
+
+{rails}[[cable]]
+name = "bar"
+length = 1.2
+segments = 24
+diameter = 0.020
+material = "steel_wire_rope_6x36_iwrc"
+damping = 0.01
+friction = {mu}
+path = [[{x}, {y}, -0.6], [{x}, {y}, 0.6]]
+
+[[probe]]
+name = "middle"
+cable = "bar"
+quantity = "position"
+s = 0.6
+"#,
+        px = -0.5 * n[0],
+        py = -0.5 * n[1],
+        rails = rail(-0.3) + &rail(0.3),
+        x = top[0],
+        y = top[1],
+    );
+    let sc = scenario::parse(&source, "rails.toml").unwrap_or_else(|e| panic!("{e}"));
+    run_scenario(sc).1
+}
+
+/// Coulomb friction between ropes of separate cables (issue 12): a rope
+/// lying across two rails (ropes pinned on a frictionless slope, see
+/// `rope_on_rails`), rope-on-rope μ = 0.3 (friction angle 16.70°).
+/// * At 10° it lands and sticks: after 1 s its middle moves less than
+///   0.1 µm in a second, more slowly as time goes (the pinned rails
+///   settling under the load, not creep).
+/// * At 25° it slides down the rails at Coulomb's rate
+///   `a = g (sin θ − μ cos θ)` = 1.478621 m/s² (its friction acts at its
+///   centreline: it slides, it does not roll), measured from the
+///   distances at 0.5, 1 and 1.5 s; frictionless it slides at `g sin θ`.
+#[test]
+fn a_rope_across_two_rails_sticks_below_the_friction_angle_and_slides_at_coulombs_rate_above() {
+    let g = 9.81;
+    let distance = |rows: &[Vec<f64>], k: usize| {
+        let (a, b) = (&rows[0], &rows[k]);
+        ((b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2) + (b[3] - a[3]).powi(2)).sqrt()
+    };
+    let rows = rope_on_rails(10.0, 0.3);
+    let late = &rows[59..];
+    let moved = (0..late.len()).map(|k| distance(late, k)).fold(0.0f64, f64::max);
+    let (first, second) = (distance(&rows[59..], 30), distance(&rows[89..], 30));
+    eprintln!("10°: slid {:.3e} m while landing, then moved {moved:e} m in 1 s ({first:e} m, then {second:e} m per half second)", distance(&rows, 59));
+    assert!(moved < 1e-7, "10°, μ 0.3: the rope crept {moved} m along the rails");
+    assert!(second < first, "10°, μ 0.3: creeping, not settling: {first} m then {second} m per half second");
+    for (degrees, mu) in [(25.0, 0.3), (25.0, 0.0)] {
+        let rows = rope_on_rails(degrees, mu);
+        let s = |k: usize| distance(&rows, k);
+        let dt = 0.5;
+        let a = (s(89) - 2.0 * s(59) + s(29)) / (dt * dt);
+        let th = f64::to_radians(degrees);
+        let expected = g * (th.sin() - mu * th.cos());
+        eprintln!("{degrees}°, μ {mu}: a = {a:.6} m/s² vs {expected:.6} ({:+.2e}); slid {:.3} m in 1.5 s", a / expected - 1.0, s(89));
+        assert!((a / expected - 1.0).abs() < 2e-3, "{degrees}°, μ {mu}: a = {a} m/s² vs {expected}");
+    }
+}

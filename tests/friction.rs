@@ -94,6 +94,66 @@ fn sticking_friction_tangents_are_the_derivatives_of_its_wrench() {
     }
 }
 
+/// Friction between two points of ropes (a [`PairContact`] with
+/// [`PairFriction`], rope on rope): while it sticks, its stiffness and
+/// damping are the derivatives of the force on the first point with
+/// respect to the points' relative position and velocity (central
+/// differences, within 1e-6 of the largest entry), the second point gets
+/// the opposite force; slipping, the force is `μ F_n` against the trial
+/// force, and its tangents are the derivatives for motions in the
+/// contact's plane (the normal force's coupling into the slip force is
+/// left out by design, as for [`SphereContact`]).
+#[test]
+fn pair_friction_tangents_are_the_derivatives_of_its_force() {
+    let law = ImpactLaw::hertz(1.154e11, 0.01, 40.0, 1e-5).unwrap();
+    let normal = DVec3::new(0.0, 0.8, 0.6);
+    let b = at(DVec3::new(0.3, -0.2, 0.1), DMat3::IDENTITY);
+    let touching = |offset: f64| PointState {
+        velocity: DVec3::new(1e-4, -2e-5, 3e-5),
+        ..at(b.point + normal * (0.02 - 2e-6) + DVec3::new(offset, 0.0, 0.0), DMat3::IDENTITY)
+    };
+    for (name, slipping) in [("sticking", false), ("slipping", true)] {
+        // Stretched 1e-7 m in x (sticking) or 1e-4 m (far past the limit).
+        let a = touching(if slipping { 1e-4 } else { 1e-7 });
+        let friction = PairFriction::from_law(0.3, &law, a.point - b.point - DVec3::new(if slipping { 1e-4 } else { 1e-7 }, 0.0, 0.0), 1e9).unwrap();
+        let c = PairContact { friction: Some(friction), ..PairContact::new(normal, 0.02, law) };
+        let w = c.wrench(0.0, &a, &b);
+        let (f, stick) = c.friction_force(&a, &b);
+        let fn_ = c.contact_force(0.0, &a, &b).unwrap();
+        assert!(stick != slipping && f.length() > 1e-3 * fn_, "{name}: not what the case says: {f} {stick}");
+        if slipping {
+            assert!((f.length() - 0.3 * fn_).abs() < 1e-12 * fn_, "slipping at {} N, μ F_n = {} N", f.length(), 0.3 * fn_);
+        }
+        assert!(w.normal.is_none(), "{name}: a contact with friction acts in three directions");
+        let tangent_plane = |d: DVec3| d - normal * d.dot(normal);
+        for (rate, tangent, eps) in [(false, w.stiffness, 1e-10), (true, w.damping, 1e-7)] {
+            let scale = tangent.to_cols_array().iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            for j in 0..3 {
+                let mut d = DVec3::ZERO;
+                d[j] = eps;
+                // Slipping: only motions in the contact's plane.
+                let d = if slipping { tangent_plane(d) } else { d };
+                let moved = |sign: f64| {
+                    let mut s = a;
+                    if rate {
+                        s.velocity += d * sign;
+                    } else {
+                        s.point += d * sign;
+                    }
+                    c.wrench(0.0, &s, &b).force
+                };
+                let fd = -(moved(1.0) - moved(-1.0)) / (2.0 * eps);
+                let expected = tangent * (d / eps);
+                assert!(
+                    (fd - expected).abs().max_element() < 1e-6 * scale,
+                    "{name} {}: column {j}: finite difference {fd}, tangent {expected} (scale {scale:e})",
+                    if rate { "damping" } else { "stiffness" }
+                );
+            }
+        }
+    }
+}
+
 /// The stick spring stretches with the slip at the contact point: a ball
 /// that rolls by 0.5 rad in one step (its centre 25 mm on, 30 times the
 /// largest stick deflection) keeps it relaxed (below 1e-9 of the slipping

@@ -369,14 +369,16 @@ fn at_arm(arm: DVec3, m: DMat3) -> M6 {
     M6 { a: -(s * m * s), b: s * m, c: -(m * s), d: m }
 }
 
-/// A contact between two material points of one chain (a rope touching
-/// itself, or another rope of its tree): two spheres whose radii sum to
-/// `radius` pushed apart along `normal` (from the second point to the
-/// first), frozen for the step as a contact's plane is. Penetration
-/// `δ = radius − (p_a − p_b)·n`, its rate `δ̇ = −(v_a − v_b)·n`, the
-/// force `F_n(δ, δ̇) n` of the [`ImpactLaw`] on the first point and the
-/// opposite on the second, with the tangents `∂F_n/∂δ n nᵀ` and
-/// `∂F_n/∂δ̇ n nᵀ`; frictionless.
+/// A contact between two material points of one chain, or of two chains
+/// stepped together (a rope touching itself, another rope, or a free
+/// body): two spheres whose radii sum to `radius` pushed apart along
+/// `normal` (from the second point to the first), frozen for the step as
+/// a contact's plane is. Penetration `δ = radius − (p_a − p_b)·n`, its
+/// rate `δ̇ = −(v_a − v_b)·n`, the force `F_n(δ, δ̇) n` of the
+/// [`ImpactLaw`] on the first point and the opposite on the second, with
+/// the tangents `∂F_n/∂δ n nᵀ` and `∂F_n/∂δ̇ n nᵀ`; with
+/// [`PairFriction`], Coulomb friction with a stick state between the two
+/// points (see there).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairContact {
     /// Unit normal from the second point to the first, world.
@@ -385,12 +387,109 @@ pub struct PairContact {
     pub radius: f64,
     /// The normal law.
     pub law: ImpactLaw,
+    /// Coulomb friction with a stick state (`None`: frictionless).
+    pub friction: Option<PairFriction>,
+}
+
+/// Coulomb friction of a [`PairContact`] with a stick state, acting at the
+/// two points themselves (a rope's centreline: a rope element does not
+/// roll, as with [`CoulombFriction::at_surface`] `false`; a free body's
+/// point is on its surface, so the body's turn counts in the slip): a
+/// tangential spring `stiffness` and damper `damping` on the points'
+/// relative motion in the contact's plane, `F_t = −k_t P((p_a − p_b) −
+/// offset) − c_t P(v_a − v_b)` on the first point (`P = I − n nᵀ`),
+/// capped at `coefficient` times the normal force (limited by
+/// `normal_bound`, as [`CoulombFriction::normal_bound`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairFriction {
+    /// Coulomb coefficient `μ` (≥ 0).
+    pub coefficient: f64,
+    /// Stick stiffness `k_t`, N/m (> 0).
+    pub stiffness: f64,
+    /// Stick damping `c_t` on the slip rate, N·s/m (≥ 0).
+    pub damping: f64,
+    /// The relative position `p_a − p_b` (world, m) at which the stick
+    /// spring is relaxed (only its part in the contact's plane counts).
+    pub offset: DVec3,
+    /// The normal force the friction limit may use, N (the contact's at
+    /// the end of the previous step; 0 for a new contact): the limit is
+    /// `μ min(F_n, normal_bound)`.
+    pub normal_bound: f64,
+}
+
+impl PairFriction {
+    /// Friction `coefficient` (≥ 0) on a pair contact with normal law
+    /// `law`: the stick spring is the law's stiffness at its damping depth,
+    /// `e K d_max^(e−1)`, damped by its `C_max` (as
+    /// [`CoulombFriction::from_law`]). `offset` (m) and `normal_bound` (N):
+    /// see [`PairFriction::offset`] and [`PairFriction::normal_bound`].
+    pub fn from_law(coefficient: f64, law: &ImpactLaw, offset: DVec3, normal_bound: f64) -> Result<Self, ContactError> {
+        if !(coefficient >= 0.0 && coefficient.is_finite()) {
+            return Err(ContactError::OutOfRange { name: "friction coefficient", value: coefficient, range: ">= 0" });
+        }
+        if normal_bound.is_nan() || normal_bound < 0.0 {
+            return Err(ContactError::OutOfRange { name: "normal bound", value: normal_bound, range: ">= 0 N" });
+        }
+        let stiffness = law.exponent * law.stiffness * law.damping_depth.powf(law.exponent - 1.0);
+        Ok(PairFriction { coefficient, stiffness, damping: law.max_damping, offset, normal_bound })
+    }
 }
 
 impl PairContact {
+    /// A frictionless contact along unit `normal` (from the second point
+    /// to the first) between spheres whose radii sum to `radius` (m).
+    pub fn new(normal: DVec3, radius: f64, law: ImpactLaw) -> Self {
+        PairContact { normal, radius, law, friction: None }
+    }
+
     /// Penetration (m, > 0 when touching) and its rate (m/s).
     pub fn depth(&self, a: &PointState, b: &PointState) -> (f64, f64) {
         (self.radius - (a.point - b.point).dot(self.normal), -(a.velocity - b.velocity).dot(self.normal))
+    }
+
+    /// The friction force on the first point (N, in the contact's plane;
+    /// zero without friction or contact) and whether it sticks.
+    pub fn friction_force(&self, a: &PointState, b: &PointState) -> (DVec3, bool) {
+        let (depth, rate) = self.depth(a, b);
+        let normal = self.law.force(depth, rate).0;
+        self.tangential(a, b, normal).map_or((DVec3::ZERO, false), |x| (x.force, x.direction == DVec3::ZERO))
+    }
+
+    /// The stick spring's stretch (m, world, in the contact's plane) to
+    /// carry into the next step's contact at the same place, with the
+    /// points at `a` and `b` at the end of this one: kept while the
+    /// contact sticks; once it slips, the stretch that alone gives the
+    /// slipping force; relaxed without a friction limit (a new contact, or
+    /// none now); `None` without friction.
+    pub fn next_stretch(&self, a: &PointState, b: &PointState) -> Option<DVec3> {
+        let friction = self.friction?;
+        let (depth, rate) = self.depth(a, b);
+        Some(match self.tangential(a, b, self.law.force(depth, rate).0) {
+            None => DVec3::ZERO,
+            Some(x) if x.direction == DVec3::ZERO => x.stretch,
+            Some(x) => -x.force / friction.stiffness,
+        })
+    }
+
+    /// The tangential part at normal force `normal` (N); `None` without
+    /// friction or without a limit.
+    fn tangential(&self, a: &PointState, b: &PointState, normal: f64) -> Option<Tangential> {
+        let friction = self.friction?;
+        let limit = friction.coefficient * normal.min(friction.normal_bound);
+        if limit <= 0.0 {
+            return None;
+        }
+        let n = self.normal;
+        let project = |x: DVec3| x - n * x.dot(n);
+        let stretch = project(a.point - b.point - friction.offset);
+        let trial = -(stretch * friction.stiffness + project(a.velocity - b.velocity) * friction.damping);
+        let size = trial.length();
+        Some(if size <= limit {
+            Tangential { force: trial, scale: 1.0, direction: DVec3::ZERO, arm: DVec3::ZERO, stretch }
+        } else {
+            let direction = trial / size;
+            Tangential { force: direction * limit, scale: limit / size, direction, arm: DVec3::ZERO, stretch }
+        })
     }
 }
 
@@ -398,14 +497,34 @@ impl PairElement for PairContact {
     fn wrench(&self, _t: f64, a: &PointState, b: &PointState) -> PairWrench {
         let (depth, rate) = self.depth(a, b);
         let (f, k, c) = self.law.force(depth, rate);
-        let nn = outer3(self.normal, self.normal);
+        let n = self.normal;
+        let nn = outer3(n, n);
         // (At zero force, inside and separating: the tangents alone, see
         // `ImpactLaw::force`.)
-        PairWrench { force: self.normal * f, stiffness: nn * k, damping: nn * c, normal: Some(self.normal) }
+        let mut w = PairWrench { force: n * f, stiffness: nn * k, damping: nn * c, normal: Some(n) };
+        if f > 0.0 {
+            if let (Some(friction), Some(x)) = (self.friction, self.tangential(a, b, f)) {
+                // As `SphereContact`'s (at the centreline): sticking
+                // k_t P, slipping k_t (μ F_n/|F_trial|)(P − d̂ d̂ᵀ); the
+                // slip force's coupling to the normal one left out.
+                let d = x.direction;
+                let tangent = DMat3::IDENTITY - nn - outer3(d, d);
+                w.force += x.force;
+                w.stiffness += tangent * (friction.stiffness * x.scale);
+                w.damping += tangent * (friction.damping * x.scale);
+                w.normal = None;
+            }
+        }
+        w
     }
 
     fn energy(&self, _t: f64, a: &PointState, b: &PointState) -> f64 {
-        self.law.potential(self.depth(a, b).0)
+        let (depth, rate) = self.depth(a, b);
+        let stick = match (self.friction, self.tangential(a, b, self.law.force(depth, rate).0)) {
+            (Some(friction), Some(x)) if x.direction == DVec3::ZERO => 0.5 * friction.stiffness * x.stretch.length_squared(),
+            _ => 0.0,
+        };
+        self.law.potential(depth) + stick
     }
 
     fn contact_force(&self, _t: f64, a: &PointState, b: &PointState) -> Option<f64> {

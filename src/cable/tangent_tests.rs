@@ -535,7 +535,7 @@ fn pair_element_tangents_match_finite_differences() {
         (m.chain.link_point(e3, DVec3::new(0.02, 0.0, 0.0)).unwrap() - m.chain.link_point(e0, DVec3::ZERO).unwrap()).dot(normal)
     };
     let law = ImpactLaw::new(3e4, 1.5, 0.0, 1e-3).unwrap();
-    let pressed = PairContact { normal, radius: apart + 0.2, law };
+    let pressed = PairContact::new(normal, apart + 0.2, law);
     m.chain.pairs_mut().push(AttachedPair { link_a: e3, point_a: DVec3::new(0.02, 0.0, 0.0), link_b: e0, point_b: DVec3::ZERO, element: Arc::new(pressed) });
     for (seed, c_q) in [(24, 1.0), (25, 1e-3)] {
         let err = check_tangent(&mut m, seed, c_q);
@@ -672,7 +672,7 @@ fn forest_pair_tangents_match_finite_differences() {
             link_b: e1,
             point_b: DVec3::ZERO,
             // Pressed at every configuration the check visits.
-            element: Arc::new(PairContact { normal, radius: 3.0, law }),
+            element: Arc::new(PairContact::new(normal, 3.0, law)),
         },
     ];
     let mut forest = Forest::new(vec![&mut a.chain, &mut b.chain], pairs).unwrap();

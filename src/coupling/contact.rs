@@ -21,7 +21,9 @@
 //! first contact step.
 
 use super::{BodyMotion, CarriedLink};
-use crate::cable::{AttachedForce, AttachedPair, BaseState, Cable, ContactError, CoulombFriction, ImpactLaw, PairContact, PointState, SphereContact};
+use crate::cable::{
+    AttachedForce, AttachedPair, BaseState, Cable, Chain, ContactError, CoulombFriction, ImpactLaw, PairContact, PairFriction, PointState, SphereContact,
+};
 use glam::{DMat3, DVec3};
 use rapier3d::prelude as rp;
 use std::collections::HashMap;
@@ -108,6 +110,79 @@ pub(crate) struct FrictionMemory {
     /// (kept after the step, for the bodies' `contact_force`): the
     /// obstacle's body and, for a carried body's touch point, that body.
     bodies: Vec<[Option<rp::RigidBodyHandle>; 2]>,
+    /// The friction states of the cable's pair contacts of its ropes with
+    /// themselves (and each other) at the end of the last step.
+    own_pairs: Vec<PairTouch>,
+    /// Those of its ropes' pair contacts with other cables and with free
+    /// bodies (of the pairs whose first point is this cable's) at the end
+    /// of the last step: see [`FrictionMemory::recall`].
+    pub(crate) cross_pairs: Vec<PairTouch>,
+    /// This step's own pair contacts, in the order of the chain's pair
+    /// elements after the fixed ones.
+    pair_step: Vec<PairContact>,
+}
+
+/// A pair contact's friction state kept from one step to the next, found
+/// again by where it is (the two ropes, or a rope and a body, slide along
+/// each other: no material point stays the contact's, and a touch found
+/// at a node one step may be found between two elements at the next).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PairTouch {
+    /// Midpoint of its two points at the end of the step, world, m.
+    at: DVec3,
+    /// How far from `at` the next step's contact may be to be this one:
+    /// the two radii and twice the slip over the step, m.
+    reach: f64,
+    /// The stick spring's stretch to carry over, world, m.
+    stretch: DVec3,
+    /// The normal force at the end of the step, N.
+    normal: f64,
+}
+
+impl PairTouch {
+    /// The state to remember of `contact` with its points at `a` and `b`
+    /// at the end of a step of `h` s (`None` without friction, or open).
+    fn of(contact: &PairContact, a: &PointState, b: &PointState, h: f64) -> Option<PairTouch> {
+        let stretch = contact.next_stretch(a, b)?;
+        let n = contact.normal;
+        let slip = a.velocity - b.velocity;
+        let (depth, rate) = contact.depth(a, b);
+        let normal = contact.law.force(depth, rate).0;
+        // An open contact is not kept: a touch found near it at the next
+        // step is more likely the closed one beside it (two ropes crossing
+        // near a node touch there twice), whose friction it would cut.
+        (normal > 0.0).then(|| PairTouch {
+            at: (a.point + b.point) * 0.5,
+            reach: contact.radius + 2.0 * h * (slip - n * slip.dot(n)).length(),
+            stretch,
+            normal,
+        })
+    }
+}
+
+/// `contact` between points now at `a` and `b`, with Coulomb friction
+/// `mu` (frictionless if 0) whose stick state is `recalled`'s (the same
+/// touch at the end of the last step, [`FrictionMemory::recall`]): its
+/// stretch carried over and its normal force as the limit's bound; a new
+/// touch starts relaxed with no friction in its first step (as a
+/// [`SphereContact`]'s).
+pub(crate) fn pair_friction(contact: PairContact, mu: f64, a: &PointState, b: &PointState, recalled: Option<PairTouch>) -> PairContact {
+    if mu <= 0.0 {
+        return contact;
+    }
+    let (stretch, normal) = recalled.map_or((DVec3::ZERO, 0.0), |t| (t.stretch, t.normal));
+    PairFriction::from_law(mu, &contact.law, a.point - b.point - stretch, normal).map_or(contact, |f| PairContact { friction: Some(f), ..contact })
+}
+
+/// The world state of point `local` of `chain`'s link `link` (at its last
+/// evaluation).
+pub(crate) fn chain_point(chain: &Chain, link: usize, local: DVec3) -> PointState {
+    PointState {
+        rotation: chain.link_rotation(link).unwrap_or(DMat3::IDENTITY),
+        point: chain.link_point(link, local).unwrap_or(DVec3::ZERO),
+        velocity: chain.link_point_velocity(link, local).unwrap_or(DVec3::ZERO),
+        angular_velocity: chain.link_velocity(link).map_or(DVec3::ZERO, |v| v.top),
+    }
 }
 
 impl FrictionMemory {
@@ -183,6 +258,27 @@ impl FrictionMemory {
     pub(crate) fn discard_step(&mut self) {
         self.step.clear();
         self.bodies.clear();
+        self.pair_step.clear();
+    }
+
+    /// The remembered pair touch nearest to `at` (m, world; the midpoint of
+    /// a contact's two points now) within its reach, among `memories`.
+    pub(crate) fn recall<'m>(memories: impl IntoIterator<Item = &'m [PairTouch]>, at: DVec3) -> Option<PairTouch> {
+        memories.into_iter().flatten().map(|t| (t.at.distance(at), t)).filter(|(d, t)| *d <= t.reach).min_by(|x, y| x.0.total_cmp(&y.0)).map(|(_, t)| *t)
+    }
+
+    /// After a step of `h` s: the friction state of each of this step's
+    /// own pair contacts, from their points now (the chain's pair points
+    /// after the fixed ones, in order).
+    pub(crate) fn remember_pairs(&mut self, points: impl Iterator<Item = (PointState, PointState)>, h: f64) {
+        self.own_pairs = self.pair_step.iter().zip(points).filter_map(|(c, (a, b))| PairTouch::of(c, &a, &b, h)).collect();
+    }
+
+    /// After a step of `h` s: `contact`'s friction state, its points now
+    /// at `a` and `b`, kept as one of this cable's touches with other
+    /// cables or free bodies.
+    pub(crate) fn remember_cross(&mut self, contact: &PairContact, a: &PointState, b: &PointState, h: f64) {
+        self.cross_pairs.extend(PairTouch::of(contact, a, b, h));
     }
 }
 
@@ -628,6 +724,9 @@ struct Segment {
     element: usize,
     a: DVec3,
     b: DVec3,
+    /// The rope's nodes before `a` and after `b`, if any.
+    before: Option<DVec3>,
+    after: Option<DVec3>,
     va: DVec3,
     vb: DVec3,
     element_length: f64,
@@ -635,6 +734,23 @@ struct Segment {
     /// The arc lengths (m) from the rope's start within which a touch is
     /// left out (a held end's neighbourhood), and from which on again.
     free: (f64, f64),
+}
+
+/// Whether the rope comes nearer to `q` (m) than its node `node` does, to
+/// first order, going from the node towards either neighbour in `sides`
+/// (the nodes beside it along the rope). A node's touch counts only where
+/// the rope is nearest at the node (its bend's outer corner, or a rope
+/// lying along the other, square to it): a node beside the crossing of
+/// two ropes sliding over each other touches the other rope's surface
+/// only as the rope does there, but its normal, frozen for the step, is
+/// tilted, and the other rope slid into that plane (a rope sliding down
+/// two rails jolted at every rail node and lost a third of its friction).
+fn nearer_beside(node: DVec3, q: DVec3, sides: [Option<DVec3>; 2]) -> bool {
+    let n = node - q;
+    sides.into_iter().flatten().any(|side| {
+        let d = side - node;
+        n.dot(d) < -1e-6 * n.length() * d.length()
+    })
 }
 
 /// The minimum of `f`, convex on `[lo, hi]`, by `iterations` steps of a
@@ -696,15 +812,24 @@ fn closest_on_segments(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (f64, f64)
 /// of the rope's radius come within the speculative reach get a
 /// [`PairContact`] (see [`rope_pairs`]).
 /// Returns how fast the contacts close (m/s), for the step's passes.
-pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, h: f64) -> f64 {
+pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, memory: &mut FrictionMemory, h: f64) -> f64 {
     let (pairs, approach) = rope_pairs(&[(&*cable, contact)], h, true);
-    cable.model.chain.pairs_mut().extend(pairs.into_iter().map(|p| AttachedPair {
+    let first = cable.model.chain.pairs().len();
+    cable.model.chain.pairs_mut().extend(pairs.iter().map(|p| AttachedPair {
         link_a: p.link_a,
         point_a: p.point_a,
         link_b: p.link_b,
         point_b: p.point_b,
         element: Arc::new(p.element),
     }));
+    // Their friction, from the same touches at the end of the last step.
+    let points: Vec<(PointState, PointState)> = cable.model.chain.pair_points().skip(first).collect();
+    for ((p, (a, b)), slot) in pairs.iter().zip(points).zip(first..) {
+        let recalled = FrictionMemory::recall([&memory.own_pairs[..]], (a.point + b.point) * 0.5);
+        let element = pair_friction(p.element, p.mu, &a, &b, recalled);
+        memory.pair_step.push(element);
+        cable.model.chain.pairs_mut()[slot].element = Arc::new(element);
+    }
     approach[0]
 }
 
@@ -718,6 +843,8 @@ pub(crate) struct RopePair {
     pub link_b: usize,
     pub point_b: DVec3,
     pub element: PairContact,
+    /// The friction coefficient between the two (≥ 0).
+    pub mu: f64,
 }
 
 /// A node of one of two elements: `(true, n)` the first element's rope's
@@ -777,7 +904,8 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: boo
             let free = (if held_first { margin } else { f64::NEG_INFINITY }, if held_last { length - margin } else { f64::INFINITY });
             for i in 0..nodes.len().saturating_sub(1) {
                 let (va, vb) = (velocities[i], velocities[i + 1]);
-                segments.push(Segment { cable: c, rope, element: i, a: nodes[i], b: nodes[i + 1], va, vb, element_length, radius, free });
+                let (before, after) = (i.checked_sub(1).map(|k| nodes[k]), nodes.get(i + 2).copied());
+                segments.push(Segment { cable: c, rope, element: i, a: nodes[i], b: nodes[i + 1], before, after, va, vb, element_length, radius, free });
             }
         }
     }
@@ -850,11 +978,19 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: boo
             if fa > 0.0 && fa < 1.0 && fb > 0.0 && fb < 1.0 {
                 touches.push((fa, fb, None));
             }
-            for (k, node) in [(0.0, gi.a), (1.0, gi.b)] {
-                touches.push((k, closest_on_segment(gj.a, gj.b, node), Some((true, gi.element + k as usize))));
+            // (A node only where it is nearer to the other element than the
+            // rope on both sides of it, see `nearer_beside`.)
+            for (k, node, sides) in [(0.0, gi.a, [Some(gi.b), gi.before]), (1.0, gi.b, [Some(gi.a), gi.after])] {
+                let f = closest_on_segment(gj.a, gj.b, node);
+                if !nearer_beside(node, gj.a.lerp(gj.b, f), sides) {
+                    touches.push((k, f, Some((true, gi.element + k as usize))));
+                }
             }
-            for (k, node) in [(0.0, gj.a), (1.0, gj.b)] {
-                touches.push((closest_on_segment(gi.a, gi.b, node), k, Some((false, gj.element + k as usize))));
+            for (k, node, sides) in [(0.0, gj.a, [Some(gj.b), gj.before]), (1.0, gj.b, [Some(gj.a), gj.after])] {
+                let f = closest_on_segment(gi.a, gi.b, node);
+                if !nearer_beside(node, gi.a.lerp(gi.b, f), sides) {
+                    touches.push((f, k, Some((false, gj.element + k as usize))));
+                }
             }
             for (fa, fb, vertex) in touches {
                 let (sa, sb) = ((gi.element as f64 + fa) * gi.element_length, (gj.element as f64 + fb) * gj.element_length);
@@ -875,12 +1011,20 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: boo
                 };
                 let (la, lb) = (cables[gi.cable].1.law, cables[gj.cable].1.law);
                 let law = if lb.stiffness < la.stiffness { lb } else { la };
-                let element = PairContact { normal, radius: radii, law };
+                let element = PairContact::new(normal, radii, law);
+                // Rope on rope: the two ropes' coefficients combined as
+                // rapier's `Average`.
+                let mu = 0.5 * (cables[gi.cable].1.friction + cables[gj.cable].1.friction);
                 let at = [(gi.cable, gi.rope, sa / gi.radius), (gj.cable, gj.rope, sb / gj.radius)];
                 // A node's touch is keyed by the node and the other rope.
                 let key =
                     vertex.map(|(first, node)| if first { (gi.cable, gi.rope, node, gj.cable, gj.rope) } else { (gj.cable, gj.rope, node, gi.cable, gi.rope) });
-                found.push(Found { distance: d, at, key, pair: RopePair { cable_a: gi.cable, link_a, point_a, cable_b: gj.cable, link_b, point_b, element } });
+                found.push(Found {
+                    distance: d,
+                    at,
+                    key,
+                    pair: RopePair { cable_a: gi.cable, link_a, point_a, cable_b: gj.cable, link_b, point_b, element, mu },
+                });
             }
         }
     }
@@ -980,6 +1124,7 @@ pub(crate) fn body_pairs(
         let (rope_lo, rope_hi) = nodes.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, u), p| (l.min(*p), u.max(*p)));
         for &(collider, lt, lr) in &body.colliders {
             let (co, cr) = (origin + rotation * lt, rotation * lr);
+            let mu = combine(contact.friction, collider.friction() as f64, rp::CoefficientCombineRule::Average, collider.friction_combine_rule());
             let pose = rp::Pose::from_parts(co.as_vec3(), glam::DQuat::from_mat3(&cr).normalize().as_quat());
             let aabb = collider.shape().compute_aabb(&pose);
             let (lo, hi) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
@@ -1002,8 +1147,8 @@ pub(crate) fn body_pairs(
                 let Some((link_a, point_a)) = cable.rope_point(rope, k as f64 * element_length) else {
                     continue;
                 };
-                let element = PairContact { normal: cr * normal, radius, law: contact.law };
-                pairs.push(RopePair { cable_a: chain_a, link_a, point_a, cable_b: chain_b, link_b, point_b: lt + lr * q, element });
+                let element = PairContact::new(cr * normal, radius, contact.law);
+                pairs.push(RopePair { cable_a: chain_a, link_a, point_a, cable_b: chain_b, link_b, point_b: lt + lr * q, element, mu });
             }
             // Element interiors nearer than both their nodes (a ball
             // between two nodes; the distance to a convex shape is convex
@@ -1027,8 +1172,8 @@ pub(crate) fn body_pairs(
                 let Some((link_a, point_a)) = cable.rope_point(rope, (i as f64 + f) * element_length) else {
                     continue;
                 };
-                let element = PairContact { normal: cr * normal, radius, law: contact.law };
-                pairs.push(RopePair { cable_a: chain_a, link_a, point_a, cable_b: chain_b, link_b, point_b: lt + lr * q, element });
+                let element = PairContact::new(cr * normal, radius, contact.law);
+                pairs.push(RopePair { cable_a: chain_a, link_a, point_a, cable_b: chain_b, link_b, point_b: lt + lr * q, element, mu });
             }
         }
     }

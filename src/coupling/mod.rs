@@ -1140,7 +1140,7 @@ pub fn step_cables(
                 own = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).chain(rails.flatten()).collect();
                 let start = cc.cable.time();
                 let ropes = contact::add_contacts(&mut cc.cable, &settings, &mut cc.friction, &contacts, bodies, &own, h, start);
-                let ropes = ropes.max(contact::add_self_contacts(&mut cc.cable, &settings, h));
+                let ropes = ropes.max(contact::add_self_contacts(&mut cc.cable, &settings, &mut cc.friction, h));
                 let (any, carried) = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, &own, h, start);
                 cc.body_contacts = any;
                 cc.friction.attach(&mut cc.cable, cc.fixed_forces);
@@ -1157,6 +1157,10 @@ pub fn step_cables(
     let mut alone = vec![true; cables.len()];
     for island in &islands {
         island.members.iter().for_each(|&i| alone[i] = false);
+    }
+    // A cable touching no other and no free body keeps no such touches.
+    for (cc, _) in cables.iter_mut().zip(&alone).filter(|(_, a)| **a) {
+        cc.friction.cross_pairs.clear();
     }
     // The other cables' own solves: independent of each other and of
     // rapier (every body a cable reads was sampled or handed over above),
@@ -1187,9 +1191,7 @@ pub fn step_cables(
                     break;
                 }
                 if k + 1 < count {
-                    let t = cc.cable.time();
-                    let points = cc.cable.model.chain.force_element_points().skip(cc.fixed_forces);
-                    cc.friction.remember(t, points);
+                    remember_contacts(cc, hp);
                 }
             }
         }
@@ -1203,10 +1205,7 @@ pub fn step_cables(
             cc.failed = true;
             failures.push((ci, time, e));
         } else if !cc.failed {
-            // Where each contact's friction anchor goes for the next step.
-            let t = cc.cable.time();
-            let points = cc.cable.model.chain.force_element_points().skip(cc.fixed_forces);
-            cc.friction.remember(t, points);
+            remember_contacts(cc, h);
         }
     }
     // 3. Hand the carried bodies to rapier; explicit reactions.
@@ -1278,7 +1277,7 @@ fn find_contacts(
     contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
     cc.friction.discard_step();
     contact::add_contacts(&mut cc.cable, settings, &mut cc.friction, contacts, bodies, own, hp, start);
-    contact::add_self_contacts(&mut cc.cable, settings, hp);
+    contact::add_self_contacts(&mut cc.cable, settings, &mut cc.friction, hp);
     cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, contacts, bodies, own, hp, start).0;
     cc.friction.attach(&mut cc.cable, cc.fixed_forces);
 }
@@ -1536,7 +1535,10 @@ fn island_passes(
             }
         }
         let t = cables[members[0]].cable.time();
-        let list: Vec<(&Cable, &CableContact)> = members.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
+        // The members with contacts (all of them: an island is made of ropes
+        // that touch), as the pairs' chain indices count them.
+        let listed: Vec<usize> = members.iter().copied().filter(|&i| cables[i].contact.is_some()).collect();
+        let list: Vec<(&Cable, &CableContact)> = listed.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
         let mut found = contact::rope_pairs(&list, hp, false).0;
         // The free bodies at the pass's start, as chains of their own.
         // (A body rapier no longer has keeps its state and gets no chain.)
@@ -1570,22 +1572,34 @@ fn island_passes(
             }
             chains.push((b, chain));
         }
+        // Their friction, from the same touches at the end of the last pass
+        // (kept by the members).
+        let elements: Vec<crate::cable::PairContact> = found
+            .iter()
+            .map(|p| {
+                let (a, b) =
+                    (point_of(cables, &listed, &chains, p.cable_a, p.link_a, p.point_a), point_of(cables, &listed, &chains, p.cable_b, p.link_b, p.point_b));
+                let recalled = contact::FrictionMemory::recall(listed.iter().map(|&i| &cables[i].friction.cross_pairs[..]), (a.point + b.point) * 0.5);
+                contact::pair_friction(p.element, p.mu, &a, &b, recalled)
+            })
+            .collect();
         let pairs: Vec<ForestPair> = found
             .into_iter()
-            .map(|p| ForestPair {
+            .zip(&elements)
+            .map(|(p, element)| ForestPair {
                 chain_a: p.cable_a,
                 link_a: p.link_a,
                 point_a: p.point_a,
                 chain_b: p.cable_b,
                 link_b: p.link_b,
                 point_b: p.point_b,
-                element: Arc::new(p.element),
+                element: Arc::new(*element),
             })
             .collect();
         let hs = hp / n as f64;
         for _ in 0..n {
             let t = cables[members[0]].cable.time();
-            let mut group: Vec<&mut Cable> = cables.iter_mut().enumerate().filter(|(i, _)| members.contains(i)).map(|(_, c)| &mut c.cable).collect();
+            let mut group: Vec<&mut Cable> = cables.iter_mut().enumerate().filter(|(i, _)| listed.contains(i)).map(|(_, c)| &mut c.cable).collect();
             let mut moving: Vec<&mut FreeBody> = chains.iter_mut().map(|(_, c)| c).collect();
             Cable::step_with_bodies(&mut group, &mut moving, pairs.clone(), hs).map_err(|e| (t, e))?;
         }
@@ -1593,16 +1607,45 @@ fn island_passes(
             let ((origin, rotation), (velocity, angular_velocity)) = (chain.pose(), chain.velocity());
             free[*b] = BodyPass { handle: free[*b].handle, origin, rotation, velocity, angular_velocity };
         }
+        // The friction states of the pairs between members and bodies (each
+        // kept by its first point's cable), after every pass.
+        for &i in members {
+            cables[i].friction.cross_pairs.clear();
+        }
+        for (p, element) in pairs.iter().zip(&elements) {
+            let (a, b) =
+                (point_of(cables, &listed, &chains, p.chain_a, p.link_a, p.point_a), point_of(cables, &listed, &chains, p.chain_b, p.link_b, p.point_b));
+            if let Some(&owner) = listed.get(p.chain_a) {
+                cables[owner].friction.remember_cross(element, &a, &b, hp);
+            }
+        }
         if k + 1 < count {
             for &i in members {
-                let cc = &mut *cables[i];
-                let t = cc.cable.time();
-                let points = cc.cable.model.chain.force_element_points().skip(cc.fixed_forces);
-                cc.friction.remember(t, points);
+                remember_contacts(cables[i], hp);
             }
         }
     }
     Ok(())
+}
+
+/// The world state of point `local` of link `link` of an island pass's
+/// chain `chain`: a member's (`listed`) or a free body's (`chains`, after
+/// the members).
+fn point_of(cables: &[&mut CoupledCable], listed: &[usize], chains: &[(usize, FreeBody)], chain: usize, link: usize, local: DVec3) -> crate::cable::PointState {
+    match listed.get(chain) {
+        Some(&i) => contact::chain_point(&cables[i].cable.model.chain, link, local),
+        None => contact::chain_point(&chains[chain - listed.len()].1.chain, link, local),
+    }
+}
+
+/// Where each contact's friction anchor goes for the next step (or pass)
+/// of `h` s: `cc`'s contacts with rapier's colliders and its ropes' with
+/// themselves, from their points now.
+fn remember_contacts(cc: &mut CoupledCable, h: f64) {
+    let t = cc.cable.time();
+    let chain = &cc.cable.model.chain;
+    cc.friction.remember(t, chain.force_element_points().skip(cc.fixed_forces));
+    cc.friction.remember_pairs(chain.pair_points().skip(cc.fixed_pairs), h);
 }
 
 /// Approach (m) that one contact pass may close (or an obstacle near the
