@@ -7,11 +7,15 @@
 //! settled for 1 s before timing. `docs/performance.md` reports the ratios
 //! and the growth from N = 100 to 1 000. Two and ten separate ropes
 //! resting across each other on the ground (one island, stepped as one
-//! system) against the same ropes lying apart.
+//! system) against the same ropes lying apart. A 1 000-element (and a
+//! 100-element) rope coiled flat on the ground, its turns apart (ground
+//! contacts only) or touching (a pair contact between neighbouring turns),
+//! against the same coil without contact.
 
+use bevy_rapier_cable::cable::preset;
 use bevy_rapier_cable::scenario;
 use bevy_rapier_cable::sim::World;
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion};
 
 #[path = "common/cpu_time.rs"]
 mod cpu_time;
@@ -173,31 +177,143 @@ path = {path}
     settled(&src, "ropes_bench.toml")
 }
 
+/// Pitch of a coil whose turns do not touch (2.5 diameters: a 30 mm gap).
+const SPACED: f64 = 0.05;
+/// Pitch of a coil whose neighbouring turns touch (one diameter and 1 mm:
+/// 1 mm apart, within the pair contacts' reach).
+const TOUCHING: f64 = 0.021;
+
+/// A flat Archimedean spiral `r = 0.5 m + pitch·θ/2π` in the plane
+/// y = 0.011 (a 20 mm rope 1 mm above the ground), from the inside out:
+/// `n + 1` points 0.05 m of arc apart, and the length of that polyline.
+fn coil_path(n: usize, pitch: f64) -> (Vec<[f64; 3]>, f64) {
+    let b = pitch / std::f64::consts::TAU;
+    let r = |th: f64| 0.5 + b * th;
+    let mut path = vec![[r(0.0), 0.011, 0.0]];
+    // The arc length integrated (midpoint rule) in steps of 1e-5 rad, each
+    // point placed where the arc reaches its multiple of 0.05 m.
+    let (dth, mut th, mut s) = (1e-5, 0.0f64, 0.0f64);
+    while path.len() < n + 1 {
+        let ds = (r(th + 0.5 * dth).powi(2) + b * b).sqrt() * dth;
+        let next = 0.05 * path.len() as f64;
+        if s + ds >= next {
+            let t = th + dth * (next - s) / ds;
+            path.push([r(t) * t.cos(), 0.011, r(t) * t.sin()]);
+        }
+        s += ds;
+        th += dth;
+    }
+    let laid = path.windows(2).map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][2] - w[0][2]).powi(2)).sqrt()).sum();
+    (path, laid)
+}
+
+/// A rope of `n` elements of 0.05 m coiled flat on a fixed ground box
+/// ([`coil_path`]: its coil is its stress-free shape, let go 1 mm above the
+/// ground; the defaults' friction, 0.3 on the rope and 0.5 on the ground,
+/// μ = 0.4 combined; damping 0.05 s), with contacts, or without contact nor
+/// gravity (at rest where it was laid), settled for 1 s.
+fn coil_world(n: usize, pitch: f64, contacts: bool) -> World {
+    let (path, laid) = coil_path(n, pitch);
+    let half = path.iter().map(|p| p[0].hypot(p[2])).fold(0.0, f64::max) + 1.0;
+    let points: Vec<String> = path.iter().map(|p| format!("[{}, {}, {}]", p[0], p[1], p[2])).collect();
+    let src = format!(
+        r#"
+[simulation]
+duration = 1000.0
+dt = 0.016666666666666666
+gravity = [0.0, {g}, 0.0]
+
+[[body]]
+name = "ground"
+type = "fixed"
+shape = "cuboid"
+half_extents = [{half}, 0.5, {half}]
+position = [0.0, -0.5, 0.0]
+
+[[cable]]
+name = "rope"
+length = {laid}
+segments = {n}
+diameter = 0.020
+material = "steel_wire_rope_6x36_iwrc"
+damping = 0.05
+stress_free = true
+contacts = {contacts}
+path = [{points}]
+"#,
+        g = if contacts { -9.81 } else { 0.0 },
+        points = points.join(", "),
+    );
+    let w = settled(&src, "coil_bench.toml");
+    // The scene is what it says: the ground carries the rope's weight, every
+    // node rests on it, at rest; pair contacts between the turns only where
+    // they touch (about one per node of the inner of two neighbouring
+    // turns: an outer turn's node is farther than its chords).
+    let rope = w.rope("rope").unwrap();
+    let weight = preset("steel_wire_rope_6x36_iwrc", 0.020).unwrap().linear_density * rope.length() * 9.81;
+    let force = rope.contact_force();
+    let pairs = w.cable("rope").unwrap().model.chain.pairs().len();
+    let lowest = rope.nodes().iter().map(|p| p.y).fold(f64::MAX, f64::min);
+    let highest = rope.nodes().iter().map(|p| p.y).fold(f64::MIN, f64::max);
+    let fastest = rope.node_velocities().iter().map(|v| v.length()).fold(0.0, f64::max);
+    eprintln!("coil, N = {n}, pitch {pitch} m, contacts {contacts}: contact force {force:.3} N (weight {weight:.3} N), {pairs} pair contacts, nodes at y {lowest:.5}..{highest:.5} m, fastest {fastest:.1e} m/s");
+    assert!(fastest < 1e-6, "not at rest: {fastest} m/s");
+    // On the ground (its top at y = 0) within 0.1 mm; without contact where it was laid.
+    let y = if contacts { 0.010 } else { 0.011 };
+    assert!((lowest - y).abs() < 1e-4 && (highest - y).abs() < 1e-4, "nodes at y {lowest}..{highest} m");
+    if contacts {
+        assert!((force - weight).abs() < 1e-3 * weight, "contact force {force} N for a weight of {weight} N");
+    } else {
+        assert_eq!(force, 0.0);
+    }
+    if contacts && pitch < SPACED {
+        assert!(pairs >= n / 4 && pairs <= 2 * n, "{pairs} pair contacts between touching turns");
+    } else {
+        assert_eq!(pairs, 0, "pair contacts between turns that do not touch");
+    }
+    w
+}
+
+/// One frame step of the world `make` builds, as the benchmark `id` of
+/// `g`; built (and settled) on the benchmark's first run only, so that a
+/// filter that skips it skips the settling too.
+fn bench_step(g: &mut BenchmarkGroup<'_, cpu_time::ThreadCpuTime>, id: BenchmarkId, make: impl FnOnce() -> World) {
+    let mut make = Some(make);
+    let mut world = None;
+    g.bench_function(id, |b| {
+        let w = world.get_or_insert_with(|| make.take().expect("built once")());
+        b.iter(|| w.step().unwrap())
+    });
+}
+
 fn contact(c: &mut Criterion<cpu_time::ThreadCpuTime>) {
     let mut g = c.benchmark_group("contact/ropes_crossing_step");
     for ropes in [2usize, 10] {
         for crossing in [false, true] {
-            let mut w = ropes_world(ropes, crossing);
             let id = BenchmarkId::new(if crossing { "crossing" } else { "apart" }, ropes);
-            g.bench_function(id, |b| b.iter(|| w.step().unwrap()));
+            bench_step(&mut g, id, || ropes_world(ropes, crossing));
         }
     }
     g.finish();
     let mut g = c.benchmark_group("contact/rope_on_itself_step");
     for n in [200usize, 1000] {
         for crossings in [0usize, 1, 10] {
-            let mut w = crossing_world(n, crossings);
             let id = BenchmarkId::new(format!("crossings_{crossings}"), n);
-            g.bench_function(id, |b| b.iter(|| w.step().unwrap()));
+            bench_step(&mut g, id, || crossing_world(n, crossings));
         }
     }
     g.finish();
     let mut g = c.benchmark_group("contact/rope_on_ground_step");
     for n in [100usize, 1000] {
         for (name, contacts) in [("friction", Some(0.4)), ("frictionless", Some(0.0)), ("no_contacts", None)] {
-            let mut w = world(n, contacts);
-            let id = BenchmarkId::new(name, n);
-            g.bench_function(id, |b| b.iter(|| w.step().unwrap()));
+            bench_step(&mut g, BenchmarkId::new(name, n), || world(n, contacts));
+        }
+    }
+    g.finish();
+    let mut g = c.benchmark_group("contact/coiled_rope_step");
+    for n in [100usize, 1000] {
+        for (name, pitch, contacts) in [("spaced", SPACED, true), ("touching", TOUCHING, true), ("no_contacts", SPACED, false)] {
+            bench_step(&mut g, BenchmarkId::new(name, n), || coil_world(n, pitch, contacts));
         }
     }
     g.finish();
