@@ -111,8 +111,9 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 30] = [
+const COMPARED: [&str; 31] = [
     "axial_bounce",
+    "ball_hits_payload",
     "ball_on_rope",
     "bend_45",
     "boom_hoist",
@@ -163,6 +164,7 @@ macro_rules! same_rows {
 
 same_rows!(
     axial_bounce,
+    ball_hits_payload,
     ball_on_rope,
     bend_45,
     boom_hoist,

@@ -54,6 +54,17 @@ fn replace(from: &str, to: &str) -> String {
     BASE.replacen(from, to, 1)
 }
 
+/// A body's `restitution` is a coefficient from 0 to 1: outside, or not a
+/// number, it is refused where it stands.
+#[test]
+fn restitution_out_of_range_is_refused() {
+    check(&replace("mass = 10", "mass = 10\nrestitution = 1.5"), 11, 15, "`restitution` must be between 0 and 1, found 1.5");
+    check(&replace("mass = 10", "mass = 10\nrestitution = -0.1"), 11, 15, "`restitution` must be between 0 and 1");
+    check(&replace("mass = 10", "mass = 10\nrestitution = nan"), 11, 15, "`restitution` must be a finite number");
+    let s = parse(&replace("mass = 10", "mass = 10\nrestitution = 0.7"), "ok.toml").unwrap();
+    assert_eq!(s.bodies[0].restitution, 0.7);
+}
+
 #[test]
 fn base_is_valid() {
     let s = parse(BASE, "base.toml").unwrap();
@@ -367,7 +378,7 @@ fn defaults_are_right() {
     assert_eq!((env.air_density, env.wind, env.water_surface, env.water_density, env.current), (1.225, DVec3::ZERO, None, 1025.0, DVec3::ZERO));
     let b = &s.bodies[0];
     assert_eq!((b.rotation, b.linear_velocity, b.angular_velocity), (DQuat::IDENTITY, DVec3::ZERO, DVec3::ZERO));
-    assert_eq!((b.friction, b.wind_area, b.wind_coefficient, b.motion.is_none()), (0.5, 0.0, 0.0, true));
+    assert_eq!((b.friction, b.restitution, b.wind_area, b.wind_coefficient, b.motion.is_none()), (0.5, 0.0, 0.0, 0.0, true));
     let c = &s.cables[0];
     assert_eq!((c.damping, c.friction, c.drag_normal, c.drag_tangential, c.added_mass), (0.0, 0.3, 1.2, 0.008, 1.0));
     assert_eq!((c.ei2, c.shear_stiffness, c.contacts, c.material.is_none()), (1.0, None, true, true));

@@ -332,6 +332,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
             Transform::from_translation(b.position_at(0.0).as_vec3()).with_rotation(b.rotation_at(0.0).as_quat()),
             collider,
             Friction::coefficient(b.friction as f32),
+            Restitution::coefficient(b.restitution as f32),
             Velocity { linear: b.linear_velocity.as_vec3(), angular: b.angular_velocity.as_vec3() },
             Sleeping::disabled(),
             exact,

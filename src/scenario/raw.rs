@@ -136,6 +136,7 @@ pub(crate) struct RawBody {
     pub linear_velocity: Option<Vector>,
     pub angular_velocity: Option<Vector>,
     pub friction: Option<S<f64>>,
+    pub restitution: Option<S<f64>>,
     pub wind_area: Option<S<f64>>,
     pub wind_coefficient: Option<S<f64>>,
     pub motion: Option<S<RawMotion>>,

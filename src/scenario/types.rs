@@ -169,6 +169,10 @@ pub struct Body {
     pub angular_velocity: DVec3,
     /// Coulomb friction coefficient of its contacts (default 0.5).
     pub friction: f64,
+    /// Restitution coefficient (0 to 1) of rapier's contacts between it
+    /// and other rigid bodies, combined as rapier combines two colliders'
+    /// (their mean by default); 0 by default, rapier's.
+    pub restitution: f64,
     /// Exposed area for wind load, m² (default 0).
     pub wind_area: f64,
     /// Wind shape coefficient C (default 0).
