@@ -98,3 +98,43 @@ fn tumbling_free_rope_conserves_momentum_through_all_orientations() {
         }
     }
 }
+
+/// `Cable::apply_impulse` on a free rope at rest (no gravity): an impulse
+/// `P` at a point of an element and an angular impulse `L` change the
+/// chain's linear momentum by exactly `P` and its angular momentum about
+/// the origin by `r × P + L` (the mass matrix's response, `M⁻¹ Jᵀ`), and
+/// give it the kinetic energy `½ (P·v + L·ω)` (`½ Jᵀ M⁻¹ J`, `v` the
+/// struck point's velocity and `ω` its link's after the impulse); the
+/// positions are unchanged. A non-finite impulse and an unknown link are
+/// refused.
+#[test]
+fn an_impulse_changes_the_ropes_momentum_by_itself() {
+    let mut c = free_rope(DVec3::ZERO);
+    let link = c.model.layout.element_link(4);
+    let point = DVec3::new(0.05, 0.01, 0.0);
+    let (p0, l0, _) = momenta(&c);
+    let q0 = c.state.q.clone();
+    let at = c.model.chain.link_point(link, point).unwrap();
+    let (impulse, angular) = (DVec3::new(0.3, -1.2, 0.7), DVec3::new(0.01, 0.02, -0.03));
+    c.apply_impulse(link, point, impulse, angular, 0.0).unwrap();
+    let (p1, l1, _) = momenta(&c);
+    let dp = p1 - p0 - impulse;
+    let dl = l1 - l0 - (at.cross(impulse) + angular);
+    let energy = c.kinetic_energy();
+    let ch = &c.model.chain;
+    let work = 0.5 * (impulse.dot(ch.link_point_velocity(link, point).unwrap()) + angular.dot(ch.link_velocity(link).unwrap().top));
+    println!("momentum off by {:e}, angular momentum off by {:e}; kinetic energy {energy:.9} J, ½ (P·v + L·ω) = {work:.9} J", dp.length(), dl.length());
+    assert!(dp.length() < 1e-9 * impulse.length(), "linear momentum off by {dp}");
+    assert!(dl.length() < 1e-9 * (at.cross(impulse) + angular).length(), "angular momentum off by {dl}");
+    assert!(energy > 0.0 && (energy - work).abs() < 1e-9 * energy, "kinetic energy {energy} J against {work} J");
+    assert_eq!(c.state.q, q0, "an impulse does not move the rope");
+    assert!(c.apply_impulse(link, point, DVec3::new(f64::NAN, 0.0, 0.0), DVec3::ZERO, 0.0).is_err());
+    assert!(c.apply_impulse(10_000, point, impulse, DVec3::ZERO, 0.0).is_err());
+    assert!(c.apply_impulse(link, point, impulse, DVec3::ZERO, -1.0).is_err());
+    // Taken over a step (the springs answering): momentum still exactly P.
+    let (p1, _, _) = momenta(&c);
+    c.apply_impulse(link, point, impulse, DVec3::ZERO, 1.0 / 60.0).unwrap();
+    let (p2, _, _) = momenta(&c);
+    println!("over a step: momentum off by {:e}", (p2 - p1 - impulse).length());
+    assert!((p2 - p1 - impulse).length() < 1e-9 * impulse.length(), "over a step: momentum off by {}", p2 - p1 - impulse);
+}

@@ -171,9 +171,8 @@ fn gravity_scale_acts_in_the_cable_solve() {
 
 /// A 20 kg ball at 5 m/s (no gravity on it) hits the resting 100 kg
 /// payload head-on. Rapier computes the contact for the two free bodies and
-/// the payload's share goes into the cable solve one step later, spread over
-/// that step (generalized-α with ρ∞ = 0 then brings the payload to its new
-/// velocity over a few steps, the lag halving every step, 10 steps here).
+/// the payload's share goes into the cable solve at its next step, as a
+/// jump in its rates (`Cable::apply_impulse`).
 /// Horizontal momentum: ball + payload keep the ball's initial momentum
 /// minus the impulse of the rope's horizontal pull on the payload,
 /// ∫ m g x/l dt (light rope, small angle), checked 10 steps after the hit.

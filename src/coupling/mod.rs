@@ -25,9 +25,10 @@
 //!   colliders stay in rapier. Every step the core
 //!   * takes the velocity change the user made since the last step (a
 //!     velocity write, an impulse) and the one rapier's contacts made in
-//!     its last step, as an impulse `J = M Δv` (and `I Δω`) spread over the
-//!     step as a load on the body's link, so the rope and the body share it
-//!     as their joint inertia dictates;
+//!     its last step, as an impulse `J = M Δv` (and `I Δω`) on the body's
+//!     link: the chain's rates jump by `M⁻¹ Jᵀ` at once
+//!     ([`Cable::apply_impulse`]), so the rope and the body share it as
+//!     their joint inertia dictates;
 //!   * applies the user's force and torque, gravity scale and damping
 //!     ([`BodyInputs`]) inside the cable solve;
 //!   * sets the rapier body's velocity so that rapier's own integration
@@ -40,8 +41,8 @@
 //!   there; the adapter gives the motor to the cable (`rail_drive`).
 //!   `LockedAxes` on a carried body are refused ([`CouplingError::LockedAxes`]).
 //!   Contact impulses are those rapier computes for a free body of the
-//!   carried body's mass, one step late: good for pushes and knocks, not a
-//!   contact law (that is the contact issue's).
+//!   carried body's mass (with the colliders' restitution and friction),
+//!   reaching the chain at its next step.
 //! * **Hub** (an island; [`Role::Carried`] in every cable on it): a dynamic
 //!   body that no impulse joint holds, at two or more cable attachments of
 //!   one batch, at least one of them a cable's end, and at none of the
@@ -1083,6 +1084,11 @@ pub fn step_cables(
         if let Some((_, Role::Trolley { joint, .. })) = cc.roles[0] {
             mute_motor(joints, joint);
         }
+        // The impulses given to the carried bodies since the last step
+        // (rapier's contacts, the user's impulses and velocity writes),
+        // applied as jumps in the chain's rates once the step's loads are
+        // set (`Cable::apply_impulse`).
+        let mut impulses = Vec::new();
         for k in 0..cc.carried.len() {
             let Some(rb) = bodies.get_mut(cc.carried[k].body) else {
                 continue;
@@ -1103,9 +1109,12 @@ pub fn step_cables(
             c.contact = (DVec3::ZERO, DVec3::ZERO);
             let input = inputs(c.body);
             let g = cc.cable.model.chain.gravity;
-            let force = input.force + g * (c.mass * (input.gravity_scale - 1.0)) + j.0 / h;
-            let moment = input.torque + j.1 / h;
+            let force = input.force + g * (c.mass * (input.gravity_scale - 1.0));
+            let moment = input.torque;
             let local_point = c.place.origin + c.place.rotation * c.com;
+            if j.0 != DVec3::ZERO || j.1 != DVec3::ZERO {
+                impulses.push((c.place.link, local_point, j));
+            }
             let (link, mass) = (c.place.link, c.mass);
             let (ld, ad) = c.link_damping;
             if let Some(lm) = cc.cable.model.chain.joint_mut_same_layout(link).and_then(|j| j.link.as_mut()) {
@@ -1115,6 +1124,17 @@ pub fn step_cables(
             }
             if force != DVec3::ZERO || moment != DVec3::ZERO {
                 cc.cable.model.chain.loads_mut().push(LinkLoad { link, force, local_point, moment });
+            }
+        }
+        // The instant response (the mass matrix alone), unless the chain is
+        // held by anchor springs: those stand in for pins and clamps, and
+        // must answer the impulse as a pin would (a sling's grafted leg gave
+        // way at its anchor and the next step failed), so they act over the
+        // step.
+        let over = if cc.cable.model.chain.anchors().is_empty() { 0.0 } else { h / n as f64 };
+        for (link, point, (impulse, angular)) in impulses {
+            if let Err(e) = cc.cable.apply_impulse(link, point, impulse, angular, over) {
+                cc.advance_failure = Some((cc.cable.time(), e));
             }
         }
     }
