@@ -28,7 +28,8 @@
 //!     its last step, as an impulse `J = M Δv` (and `I Δω`) on the body's
 //!     link: the chain's rates jump by `M⁻¹ Jᵀ` at once
 //!     ([`Cable::apply_impulse`]), so the rope and the body share it as
-//!     their joint inertia dictates;
+//!     their joint inertia dictates (a contact that persists from step to
+//!     step, a body resting on a dynamic one, is a load over the step);
 //!   * applies the user's force and torque, gravity scale and damping
 //!     ([`BodyInputs`]) inside the cable solve;
 //!   * sets the rapier body's velocity so that rapier's own integration
@@ -310,6 +311,10 @@ pub struct CarriedLink {
     /// Impulse (N·s at the centre of mass) and angular impulse (N·m·s) that
     /// rapier's contacts gave the body in its last step.
     contact: (DVec3, DVec3),
+    /// Whether rapier's contacts gave it an impulse in the step before the
+    /// last one too (a contact that persists: a body resting on a dynamic
+    /// one).
+    touching: bool,
 }
 
 /// A body that moves a cable end or takes its reaction explicitly.
@@ -986,6 +991,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
                 mark: Some((rb.linvel(), rb.angvel())),
                 landing: (DVec3::ZERO, DVec3::ZERO),
                 contact: (DVec3::ZERO, DVec3::ZERO),
+                touching: false,
             }
         })
         .collect();
@@ -1100,6 +1106,13 @@ pub fn step_cables(
             // What the user did to the body since the core left it
             // (velocity writes, impulses), exactly as rapier stores it.
             let mut j = c.contact;
+            // A contact impulse in two steps running is a persisting
+            // contact (a body resting on a dynamic one): a load over the
+            // step, which holds it as the old rule did; a new one (a
+            // strike), a user's impulse or velocity write, a jump.
+            let struck = c.contact != (DVec3::ZERO, DVec3::ZERO);
+            let persisting = struck && c.touching;
+            c.touching = struck;
             if let Some((v, w)) = c.mark {
                 if rb.linvel() != v || rb.angvel() != w {
                     j.0 += (rb.linvel() - v).as_dvec3() * c.mass;
@@ -1109,10 +1122,13 @@ pub fn step_cables(
             c.contact = (DVec3::ZERO, DVec3::ZERO);
             let input = inputs(c.body);
             let g = cc.cable.model.chain.gravity;
-            let force = input.force + g * (c.mass * (input.gravity_scale - 1.0));
-            let moment = input.torque;
+            let mut force = input.force + g * (c.mass * (input.gravity_scale - 1.0));
+            let mut moment = input.torque;
             let local_point = c.place.origin + c.place.rotation * c.com;
-            if j.0 != DVec3::ZERO || j.1 != DVec3::ZERO {
+            if persisting {
+                force += j.0 / h;
+                moment += j.1 / h;
+            } else if j.0 != DVec3::ZERO || j.1 != DVec3::ZERO {
                 impulses.push((c.place.link, local_point, j));
             }
             let (link, mass) = (c.place.link, c.mass);
