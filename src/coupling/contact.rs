@@ -814,22 +814,20 @@ fn closest_on_segments(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (f64, f64)
 /// Returns how fast the contacts close (m/s), for the step's passes.
 pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, memory: &mut FrictionMemory, h: f64) -> f64 {
     let (pairs, approach) = rope_pairs(&[(&*cable, contact)], h, true);
-    let first = cable.model.chain.pairs().len();
-    cable.model.chain.pairs_mut().extend(pairs.iter().map(|p| AttachedPair {
-        link_a: p.link_a,
-        point_a: p.point_a,
-        link_b: p.link_b,
-        point_b: p.point_b,
-        element: Arc::new(p.element),
-    }));
-    // Their friction, from the same touches at the end of the last step.
-    let points: Vec<(PointState, PointState)> = cable.model.chain.pair_points().skip(first).collect();
-    for ((p, (a, b)), slot) in pairs.iter().zip(points).zip(first..) {
-        let recalled = FrictionMemory::recall([&memory.own_pairs[..]], (a.point + b.point) * 0.5);
-        let element = pair_friction(p.element, p.mu, &a, &b, recalled);
-        memory.pair_step.push(element);
-        cable.model.chain.pairs_mut()[slot].element = Arc::new(element);
-    }
+    // Each with its friction, from the same touch at the end of the last
+    // step.
+    let chain = &cable.model.chain;
+    let attached: Vec<AttachedPair> = pairs
+        .iter()
+        .map(|p| {
+            let (a, b) = (chain_point(chain, p.link_a, p.point_a), chain_point(chain, p.link_b, p.point_b));
+            let recalled = FrictionMemory::recall([&memory.own_pairs[..]], (a.point + b.point) * 0.5);
+            let element = pair_friction(p.element, p.mu, &a, &b, recalled);
+            memory.pair_step.push(element);
+            AttachedPair { link_a: p.link_a, point_a: p.point_a, link_b: p.link_b, point_b: p.point_b, element: Arc::new(element) }
+        })
+        .collect();
+    cable.model.chain.pairs_mut().extend(attached);
     approach[0]
 }
 

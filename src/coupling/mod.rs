@@ -311,9 +311,9 @@ pub struct CarriedLink {
     /// Impulse (N·s at the centre of mass) and angular impulse (N·m·s) that
     /// rapier's contacts gave the body in its last step.
     contact: (DVec3, DVec3),
-    /// Whether rapier's contacts gave it an impulse in the step before the
-    /// last one too (a contact that persists: a body resting on a dynamic
-    /// one).
+    /// Whether rapier's contacts gave it an impulse in its last step (at
+    /// the next step, an impulse after one is a contact that persists: a
+    /// body resting on a dynamic one).
     touching: bool,
 }
 
