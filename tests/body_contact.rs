@@ -19,52 +19,73 @@ fn ball_on_rope(mass: &str) -> Vec<Vec<f64>> {
 /// The ball strikes the rope at 2.9 m/s and does not pass through it: its
 /// centre never comes nearer the rope's centreline (at the middle, under
 /// it) than the two radii, 0.108 m, less 1 mm. It bounces (up at more than
-/// 1 m/s), and comes to rest on the rope: over the last second it sits the
-/// two radii above the rope's middle (less 1 mm, or up to 3 mm more: the
-/// taut rope wraps the ball in a shallow V, its apex hanging just under
-/// the ball's lowest point, 1.2 mm here) and the contact force on
-/// the rope is at least its weight, and at most its weight over cos 30°
-/// (the contacts' normals point at the ball's centre from the points of
-/// the rope it rests on), and the ropes' force on the ball (its own
-/// `contact_force` probe) averages its weight to 1 %. From just before
-/// the strike on, the system's
-/// energy never grows (1e-3) and the strike takes some of it.
+/// 1 m/s) and goes on riding the rope (the lightly damped rope, 0.01 s,
+/// takes several seconds to calm it). From just before the strike on, the
+/// system's energy never grows (1e-3) and the strike takes some of it.
+/// The ball's own `contact_force` probe (the ropes' mean force on it over
+/// each step) is what moved it: over the last second its impulse equals
+/// the ball's momentum change less gravity's to 1e-3 of its weight.
 #[test]
-fn a_ball_dropped_on_a_taut_rope_bounces_and_rests_on_it() {
+fn a_ball_dropped_on_a_taut_rope_bounces_on_it() {
     let rows = ball_on_rope("20.0");
-    let (radii, weight) = (0.1 + 0.008, 20.0 * 9.81);
+    let (radii, mass, g) = (0.1 + 0.008, 20.0, 9.81);
     let gap = |r: &Vec<f64>| r[1] - r[3];
     let nearest = rows.iter().map(gap).fold(f64::INFINITY, f64::min);
     let strike = rows.iter().map(|r| -r[2]).fold(0.0f64, f64::max);
     let bounce = rows.iter().filter(|r| r[0] > 0.3).map(|r| r[2]).fold(0.0f64, f64::max);
-    let late: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] > 2.0).collect();
-    let mean = |k: usize| late.iter().map(|r| r[k]).sum::<f64>() / late.len() as f64;
-    let rest_gap = late.iter().map(|r| gap(r)).sum::<f64>() / late.len() as f64;
     let e0 = rows.iter().rfind(|r| r[0] <= 0.3 + 1e-9).unwrap()[5];
     let most = rows.iter().filter(|r| r[0] > 0.3).map(|r| r[5]).fold(f64::NEG_INFINITY, f64::max);
     let last = rows.last().unwrap()[5];
+    // Over the last second: the rows after t = 2 s, and the velocity at 2 s.
+    let from = rows.iter().rposition(|r| r[0] <= 2.0 + 1e-9).unwrap();
+    let late = &rows[from + 1..];
+    let duration = late.len() as f64 / 60.0;
+    let impulse = late.iter().map(|r| r[6]).sum::<f64>() / 60.0;
+    let momentum = mass * (rows.last().unwrap()[2] - rows[from][2]);
+    let balance = impulse - mass * g * duration - momentum;
     eprintln!(
-        "ball on rope: strike {strike:.3} m/s, nearest {nearest:.5} m, bounce {bounce:.3} m/s, resting gap {rest_gap:.5} m, contact {:.1} N, on the ball {:.2} N (weight {weight:.1}), energy {e0:.2} -> max {most:.2}, last {last:.2} J",
-        mean(4),
-        mean(6)
+        "ball on rope: strike {strike:.3} m/s, nearest {nearest:.5} m, bounce {bounce:.3} m/s, energy {e0:.2} -> max {most:.2}, last {last:.2} J, \
+         last second: ropes' impulse {impulse:.3} N·s, momentum change {momentum:.3} N·s, off by {balance:.2e} N·s"
     );
     assert!(strike > 2.5, "the ball should strike fast: {strike} m/s");
     assert!(nearest > radii - 1e-3, "the ball went into the rope: centre {nearest} m from its centreline");
     assert!(bounce > 1.0, "the ball should bounce: {bounce} m/s up");
-    assert!(rest_gap > radii - 1e-3 && rest_gap < radii + 3e-3, "the ball should rest on the rope: {rest_gap} m above it");
-    assert!(mean(4) >= weight && mean(4) <= weight / 30f64.to_radians().cos(), "resting contact {} N for a weight of {weight} N", mean(4));
-    // The ropes' force on the resting ball (its `contact_force` probe, the
-    // mean over each step) carries its weight.
-    assert!((mean(6) - weight).abs() < 1e-2 * weight, "the ropes hold the ball with {} N, its weight {weight} N", mean(6));
     assert!(most < e0 * (1.0 + 1e-3) && last < e0, "energy {e0} J before the strike, at most {most} J after, {last} J at the end");
+    assert!(balance.abs() < 1e-3 * mass * g * duration, "the ropes' impulse {impulse} N·s does not account for the ball's momentum change {momentum} N·s");
+}
+
+/// The same ball on a damped rope (0.1 s) comes to rest on it, and is at
+/// rest: over the last second it moves at less than 3 cm/s, sits the two
+/// radii above the rope's middle (less 1 mm, or up to 3 mm more: the taut
+/// rope wraps the ball in a shallow V, its apex just under the ball's
+/// lowest point), and the ropes' force on it (its `contact_force` probe)
+/// averages its weight to 1 %. Before the ball's pose was handed from the
+/// rope's solve to rapier, rapier re-integrated the ropes' push as a kick
+/// and put the ball 1.2 mm higher each step than the solve did: the
+/// resting ball was reported falling at 6 cm/s and struck the rope anew at
+/// every step.
+#[test]
+fn a_ball_on_a_damped_rope_comes_to_rest_on_it() {
+    let rows = run_shipped_variant("ball_on_rope", "damping = 0.01", "damping = 0.1");
+    let (radii, weight) = (0.1 + 0.008, 20.0 * 9.81);
+    let late: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] > 2.0).collect();
+    let mean = |k: usize| late.iter().map(|r| r[k]).sum::<f64>() / late.len() as f64;
+    let fastest = late.iter().map(|r| r[2].abs()).fold(0.0f64, f64::max);
+    let (low, high) = late.iter().map(|r| r[1] - r[3]).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), g| (l.min(g), h.max(g)));
+    eprintln!("ball on a damped rope, last second: fastest {fastest:.4} m/s, gap {low:.5} … {high:.5} m, ropes' force {:.2} N (weight {weight:.2})", mean(6));
+    assert!(fastest < 0.03, "the ball should be at rest: {fastest} m/s");
+    assert!(low > radii - 1e-3 && high < radii + 3e-3, "the ball should rest on the rope: {low} … {high} m above it");
+    assert!((mean(6) - weight).abs() < 1e-2 * weight, "the ropes hold the ball with {} N, its weight {weight} N", mean(6));
 }
 
 /// A heavier ball (200 kg) at the same speed: the rope gives way further,
-/// still never lets it through, and holds it.
+/// still never lets it through, and holds it. (The nearness to the rope is
+/// measured at the rope's middle, so over the first strike, while the ball
+/// is over it: afterwards it rolls along the rope, 17 cm by 3 s.)
 #[test]
 fn a_heavy_ball_is_held_by_the_rope() {
     let rows = ball_on_rope("200.0");
-    let nearest = rows.iter().map(|r| r[1] - r[3]).fold(f64::INFINITY, f64::min);
+    let nearest = rows.iter().filter(|r| r[0] < 0.6).map(|r| r[1] - r[3]).fold(f64::INFINITY, f64::min);
     let lowest = rows.iter().map(|r| r[1]).fold(f64::INFINITY, f64::min);
     eprintln!("heavy ball: nearest {nearest:.5} m, lowest centre {lowest:.4} m");
     assert!(nearest > 0.108 - 1e-3, "the heavy ball went into the rope: {nearest} m");

@@ -373,6 +373,9 @@ pub struct CoupledCable {
     /// over the last step (on the island's first cable; see
     /// [`CoupledCable::contact_force_on`]).
     free_forces: Vec<(rp::RigidBodyHandle, DVec3)>,
+    /// Where the island's solve left each free body at the end of the last
+    /// step (on the island's first cable), for [`after_rapier`].
+    free_ends: Vec<FreeEnd>,
     /// Stopped after a failed step.
     pub failed: bool,
     /// The failure of this step's advance (time of the failing sub-step),
@@ -1013,6 +1016,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         body_contacts: false,
         failed: false,
         free_forces: Vec::new(),
+        free_ends: Vec::new(),
         advance_failure: None,
     })
 }
@@ -1083,6 +1087,7 @@ pub fn step_cables(
     let mut failures = Vec::new();
     for cc in cables.iter_mut() {
         cc.free_forces.clear();
+        cc.free_ends.clear();
     }
     for cc in cables.iter_mut().filter(|c| !c.failed) {
         cc.cable.model.chain.loads_mut().truncate(cc.fixed_loads);
@@ -1447,6 +1452,18 @@ struct BodyPass {
     angular_velocity: DVec3,
 }
 
+/// A free body's state at the end of an island's step, as the island's
+/// solve left it: its frame's origin (m) and orientation and its velocity
+/// (m/s) and angular velocity (rad/s), world. See [`after_rapier`].
+#[derive(Debug, Clone, Copy)]
+struct FreeEnd {
+    handle: rp::RigidBodyHandle,
+    origin: DVec3,
+    rotation: DMat3,
+    velocity: DVec3,
+    angular_velocity: DVec3,
+}
+
 /// Steps the cables and free bodies of `island` together by `h` (s) in
 /// `count` contact passes of `n` sub-steps each: every pass finds each
 /// member's contacts again, the contacts between the members' ropes and
@@ -1525,6 +1542,13 @@ fn advance_island(
                     rb.apply_impulse(push.as_vec3(), true);
                     rb.apply_torque_impulse(turn.as_vec3(), true);
                     cables[members[0]].free_forces.push((b0.handle, push / h));
+                    cables[members[0]].free_ends.push(FreeEnd {
+                        handle: b0.handle,
+                        origin: b1.origin,
+                        rotation: b1.rotation,
+                        velocity: b1.velocity,
+                        angular_velocity: b1.angular_velocity,
+                    });
                 }
                 return;
             }
@@ -1717,6 +1741,9 @@ pub fn contact_passes(approach: f64, h: f64) -> u32 {
 /// the cable's pose and velocity.
 pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
     for cc in cables.iter_mut() {
+        for end in std::mem::take(&mut cc.free_ends) {
+            put_free_body(end, bodies);
+        }
         for k in 0..cc.carried.len() {
             let (p, r, v, w) = cc.carried_state(&cc.carried[k]);
             // Contacts with fixed and kinematic colliders are in the cable's
@@ -1748,6 +1775,28 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
             c.mark = Some((rb.linvel(), rb.angvel()));
         }
     }
+}
+
+/// A free body the ropes of an island touched, after rapier's step: if
+/// rapier changed nothing but what the island's solve already holds (its
+/// velocities are the island's end velocities: no contact of rapier's, no
+/// joint, pushed it), it is put on the pose the island's solve left it
+/// at. Rapier integrates the ropes' impulse as a kick at the step's start
+/// (then gravity over its sub-steps), the island as forces over the step:
+/// a 20 kg ball resting on a rope ended each 1/60 s step 1.2 mm higher in
+/// rapier than in the island, met the rope at the next step's start
+/// moving down at 6 cm/s, and bounced on it for ever (docs/architecture.md,
+/// "Free bodies on ropes"). A body rapier did move (or damped: rapier's
+/// damping changes its velocity too) keeps rapier's pose.
+fn put_free_body(end: FreeEnd, bodies: &mut rp::RigidBodySet) {
+    let Some(rb) = bodies.get_mut(end.handle) else {
+        return;
+    };
+    let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-5 * (1.0 + b.length());
+    if !(close(rb.linvel().as_dvec3(), end.velocity) && close(rb.angvel().as_dvec3(), end.angular_velocity)) {
+        return;
+    }
+    rb.set_position(rp::Pose::from_parts(end.origin.as_vec3(), DQuat::from_mat3(&end.rotation).normalize().as_quat()), false);
 }
 
 /// What [`build_cables`] made of one spec.

@@ -29,7 +29,7 @@
 //! | [`CableSystems::Init`] | after it | builds new cables from [`CableDescriptor`]s |
 //! | [`CableSystems::Step`] | then, before `PhysicsSet::StepSimulation` | the coupling core's phase 1: samples the bodies cable ends hang on, reads the carried bodies, advances every cable by the fixed step (f64, O(n) implicit), hands the carried bodies to rapier, applies end forces to the bodies rapier keeps |
 //! | `PhysicsSet::StepSimulation` | bevy_rapier | rapier steps |
-//! | [`CableSystems::WriteBodies`] | after it, before `PhysicsSet::Writeback` | the core's phase 2: contact impulses on carried bodies, carried bodies put on the cable's pose and velocity |
+//! | [`CableSystems::WriteBodies`] | after it, before `PhysicsSet::Writeback` | the core's phase 2: contact impulses on carried bodies, carried bodies put on the cable's pose and velocity, free bodies the ropes touched put on the pose the ropes' solve left them at |
 //! | `PhysicsSet::Writeback` | bevy_rapier | `Transform` and `Velocity` from rapier |
 //! | [`CableSystems::Readout`] | after `Writeback` | refreshes [`CableState`] for other systems |
 //!
