@@ -459,6 +459,11 @@ pub struct FreeBody {
     pub com: DVec3,
     /// Mass, kg.
     pub mass: f64,
+    /// Whether its acceleration has been made consistent with the ropes
+    /// it touches ([`Cable::step_with_bodies`](crate::cable::Cable::step_with_bodies)
+    /// does so before its first step): [`FreeBody::new`] gives it the
+    /// acceleration of its own loads alone, a free fall.
+    pub(crate) settled: bool,
 }
 
 impl FreeBody {
@@ -509,7 +514,7 @@ impl FreeBody {
         let v0 = rotation.transpose() * (velocity - angular_velocity.cross(rotation * com));
         let v = vec![v0.x, v0.y, v0.z, w.z, w.y, w.x];
         let state = crate::integrate::State::new(&mut chain, t, vec![0.0; 6], v).map_err(|e| SystemError::Model(e.to_string()))?;
-        Ok(FreeBody { chain, state, com, mass })
+        Ok(FreeBody { chain, state, com, mass, settled: false })
     }
 
     /// Evaluates the chain at its state (the queries read it).
