@@ -109,8 +109,11 @@ fn setup_posts(mut commands: Commands) {
         let x = pin.x + 0.12 * pin.x.signum();
         commands.spawn((Name::new("post"), RigidBody::Fixed, Collider::cuboid(0.08, 0.55, 0.08), Transform::from_xyz(x, 0.55, 0.0), steel));
     }
-    commands.spawn((Name::new("gallows post"), RigidBody::Fixed, Collider::cuboid(0.08, 1.6, 0.08), Transform::from_xyz(0.0, 1.6, 1.2), steel));
-    commands.spawn((Name::new("gallows arm"), RigidBody::Fixed, Collider::cuboid(0.06, 0.06, 0.66), Transform::from_xyz(0.0, PIN.y + 0.06, 0.6), steel));
+    // The gallows stands beyond the span's left post, out of the
+    // pendant's swing (the plane x = 0) and of the span (z = 0); its arm
+    // reaches along x to the pin.
+    commands.spawn((Name::new("gallows post"), RigidBody::Fixed, Collider::cuboid(0.08, 1.6, 0.08), Transform::from_xyz(-2.6, 1.6, 0.0), steel));
+    commands.spawn((Name::new("gallows arm"), RigidBody::Fixed, Collider::cuboid(1.33, 0.06, 0.06), Transform::from_xyz(-1.3, PIN.y + 0.06, 0.0), steel));
 }
 
 /// The two ropes and the hook, the hook let go at the release angle.
