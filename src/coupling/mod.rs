@@ -375,7 +375,7 @@ pub struct CoupledCable {
     free_forces: Vec<(rp::RigidBodyHandle, DVec3)>,
     /// Where the island's solve left each free body at the end of the last
     /// step (on the island's first cable), for [`after_rapier`].
-    free_ends: Vec<FreeEnd>,
+    free_ends: Vec<BodyPass>,
     /// Stopped after a failed step.
     pub failed: bool,
     /// The failure of this step's advance (time of the failing sub-step),
@@ -1452,18 +1452,6 @@ struct BodyPass {
     angular_velocity: DVec3,
 }
 
-/// A free body's state at the end of an island's step, as the island's
-/// solve left it: its frame's origin (m) and orientation and its velocity
-/// (m/s) and angular velocity (rad/s), world. See [`after_rapier`].
-#[derive(Debug, Clone, Copy)]
-struct FreeEnd {
-    handle: rp::RigidBodyHandle,
-    origin: DVec3,
-    rotation: DMat3,
-    velocity: DVec3,
-    angular_velocity: DVec3,
-}
-
 /// Steps the cables and free bodies of `island` together by `h` (s) in
 /// `count` contact passes of `n` sub-steps each: every pass finds each
 /// member's contacts again, the contacts between the members' ropes and
@@ -1542,13 +1530,7 @@ fn advance_island(
                     rb.apply_impulse(push.as_vec3(), true);
                     rb.apply_torque_impulse(turn.as_vec3(), true);
                     cables[members[0]].free_forces.push((b0.handle, push / h));
-                    cables[members[0]].free_ends.push(FreeEnd {
-                        handle: b0.handle,
-                        origin: b1.origin,
-                        rotation: b1.rotation,
-                        velocity: b1.velocity,
-                        angular_velocity: b1.angular_velocity,
-                    });
+                    cables[members[0]].free_ends.push(*b1);
                 }
                 return;
             }
@@ -1788,7 +1770,7 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
 /// moving down at 6 cm/s, and bounced on it for ever (docs/architecture.md,
 /// "Free bodies on ropes"). A body rapier did move (or damped: rapier's
 /// damping changes its velocity too) keeps rapier's pose.
-fn put_free_body(end: FreeEnd, bodies: &mut rp::RigidBodySet) {
+fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet) {
     let Some(rb) = bodies.get_mut(end.handle) else {
         return;
     };
