@@ -3,26 +3,24 @@
 //! bodies sliding on the ground (wheels are not modelled: the truck's
 //! velocity is set by the driver, the trailer's rolling resistance is a
 //! low friction coefficient and its side grip a strong lateral damping).
-//! The truck is a link of the rope's implicit solve; the trailer is kept
-//! upright by a joint to the world (free to move and to turn about the
-//! vertical), so rapier keeps it and the rope pulls it explicitly, with
-//! 10 coupled sub-steps per 1/60 s step (`with_coupled_substeps`).
+//! Rapier keeps both: the truck is at the rope's start (a body at a cable
+//! start joins the rope's solve only on a rail or as a hub of several
+//! cables), and the trailer is kept upright by a joint to the world (free
+//! to move and to turn about the vertical). The rope follows their sampled
+//! motion and pulls them explicitly, with 10 coupled sub-steps per 1/60 s
+//! step (`with_coupled_substeps`).
 //!
 //! (Two things found while writing it, reported to the core: a carried
 //! body resting on the ground sank into it and tipped over (fixed since:
 //! its corners' contacts are in the cable's solve), and the cable cannot
 //! carry a body with `LockedAxes`; hence the joint.)
 //!
-//! **Known problem** (the rope solve, reported): steering for long makes
-//! the cable stop with "Newton did not converge". `--headless 120 --steer`
-//! reproduces it: full lock from 1 s stops the cable at 1.58 s with 24
-//! segments (the rope taut and straight, 2.8 kN; with 12 segments a 1.5 s
-//! turn passes and a continuous one fails at 3.4 s). Traced: Newton's
-//! largest corrections are on the last element, the end's anchor spring
-//! to the trailer's sampled hitch (1000 × the element's stiffness), even
-//! at 6.5 µs sub-steps; with that spring 100 times softer the cable
-//! lasts until 3.65 s, so it is one cause, not the only one. The
-//! scripted run without `--steer` drives straight.
+//! (Steering used to stop the cable with "Newton did not converge" at
+//! 1.58 s. Two causes were found and fixed in the core: a sampled body's
+//! orientation was held over each step, so every new sample of the
+//! turning truck swung the rope about its pin; and the trailer end's
+//! stiff anchor spring made the Newton tangent indefinite whenever its
+//! target jumped. `tests/examples_headless.rs` runs `--steer`.)
 //!
 //! ```sh
 //! cargo run --release --features demo --example tow_rope
@@ -51,8 +49,7 @@
 //!   `tests/examples_headless.rs`).
 //! * `--screenshot FILE.png`: the same script, a screenshot 2.5 s into
 //!   the run, then exit.
-//! * `--steer`: the script also steers full left from 1 s (the known
-//!   problem above).
+//! * `--steer`: the script also steers full left from 1 s.
 
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;

@@ -136,6 +136,31 @@ fn tow_rope_runs_headless() {
     assert!(lowest > 1.0, "the rope sags to {lowest} m");
 }
 
+/// The tow rope, headless, steering full left from 1 s (`--steer`): the
+/// truck turns about 1 rad by 4 s and the trailer follows on a wider arc.
+/// Before, the cable stopped with "Newton did not converge" at 1.58 s: the
+/// sampled truck's orientation was held over each step (every new sample
+/// then swung the rope about its pin), and the trailer end's anchor spring
+/// made the tangent indefinite when its target jumped.
+#[cfg(feature = "demo")]
+#[test]
+fn tow_rope_steers_headless() {
+    let line = &report_line_with("tow_rope", &["--headless", "240", "--steer"], "tow_rope: t = 4.00 s");
+    let (truck, trailer, gap, tension, lowest) = (
+        value_after(line, "truck = "),
+        value_after(line, "trailer = "),
+        value_after(line, "gap = "),
+        value_after(line, "tension = "),
+        value_after(line, "lowest rope point = "),
+    );
+    assert!((3.4..4.0).contains(&truck), "truck {truck} m/s");
+    assert!((trailer - truck).abs() < 0.6, "trailer {trailer} m/s, truck {truck} m/s");
+    // Turning, the hitches come closer than the rope's 6 m.
+    assert!((4.5..6.1).contains(&gap), "gap {gap} m");
+    assert!(tension < 10.0, "tension {tension} kN");
+    assert!(lowest > 1.0, "the rope sags to {lowest} m");
+}
+
 /// The seed paper's cable impact, headless: 1.25 s from the 50° release. The
 /// pendant strikes the span and wraps over it: the largest contact force
 /// between the ropes is that of `cable_impact.toml` run by `cablesim`

@@ -51,6 +51,10 @@ pub struct StepStats {
     /// Branch updates of non-smooth laws (a slack element going taut, or
     /// the reverse) inside Newton solves.
     pub branch_updates: usize,
+    /// Steps retried with the tangent's fallback for indefinite iterates
+    /// after their Newton solve failed
+    /// ([`SecondOrderSystem::set_definite_tangent`]).
+    pub definite_retries: usize,
 }
 
 impl AddAssign for StepStats {
@@ -61,6 +65,7 @@ impl AddAssign for StepStats {
         self.substeps_used += o.substeps_used;
         self.line_search_evals += o.line_search_evals;
         self.branch_updates += o.branch_updates;
+        self.definite_retries += o.definite_retries;
     }
 }
 
@@ -351,6 +356,25 @@ impl Integrator {
                 }
                 Err(failure) => {
                     self.ws.restore(state);
+                    // A calm step whose first solve failed is tried again at
+                    // the same split with the tangent's fallback for
+                    // indefinite iterates (a stiff end spring whose target
+                    // jumped), before splitting; kept only if it ends calm.
+                    if n == start_n && matches!(failure, Failure::NotConverged { .. }) && stats.definite_retries == 0 && sys.calm(&state.q, &state.v) {
+                        stats.definite_retries += 1;
+                        sys.set_definite_tangent(true);
+                        let retried = self.try_substeps(sys, state, h, n, stats);
+                        sys.set_definite_tangent(false);
+                        if retried.is_ok() && sys.calm(&state.q, &state.v) {
+                            stats.substeps_used += u64::from(n);
+                            if auto {
+                                self.calm = 0;
+                                self.split = n;
+                            }
+                            return Ok(());
+                        }
+                        self.ws.restore(state);
+                    }
                     let next = n.saturating_mul(2);
                     let exhausted = next > max_n || next == n;
                     // Every split failed to converge: the last-resort pass,

@@ -149,4 +149,23 @@ pub trait SecondOrderSystem {
     fn patient_newton(&self) -> bool {
         false
     }
+
+    /// Whether a step from or to the state `(q, v)` is calm: no event
+    /// inside it (a contact, a slip, a slack element snapping taut) that
+    /// splitting the step would resolve in time. Only a calm step whose
+    /// Newton solve failed is retried with the tangent's fallback
+    /// ([`set_definite_tangent`](Self::set_definite_tangent)), and the retry
+    /// is kept only if it also ends calm. Default: never (`false`).
+    fn calm(&self, _q: &[f64], _v: &[f64]) -> bool {
+        false
+    }
+
+    /// Switches the tangent's fallback for indefinite iterates on or off:
+    /// on, a solve whose tangent turns out indefinite at the iterate is
+    /// solved again with a positive definite part of it (a chain leaves out
+    /// the geometric stiffness, see [`Chain::solve_into`](crate::cable::Chain::solve_into)).
+    /// The integrator turns it on only to retry a calm step whose Newton
+    /// solve failed, so steps that converge with the exact tangent are
+    /// unchanged. Default: no fallback (nothing to switch).
+    fn set_definite_tangent(&mut self, _on: bool) {}
 }

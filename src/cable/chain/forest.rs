@@ -375,8 +375,8 @@ impl SecondOrderSystem for Forest<'_> {
         x: &mut [f64],
     ) -> Result<(), SystemError> {
         self.evaluate(t, q, v, a, rhs, Some((c_v, c_q)))?;
-        for (chain, xk) in self.chains.iter_mut().zip(split_parts(&self.offsets, x)) {
-            chain.forward_solve(xk);
+        for ((chain, w), xk) in self.chains.iter_mut().zip(self.offsets.windows(2)).zip(split_parts(&self.offsets, x)) {
+            chain.finish_solve(c_v, c_q, &rhs[w[0]..w[1]], xk)?;
         }
         self.correct(c_v, c_q, x)
     }
@@ -412,6 +412,13 @@ impl SecondOrderSystem for Forest<'_> {
     }
     fn patient_newton(&self) -> bool {
         !self.pairs.is_empty() || self.chains.iter().any(|c| c.patient_newton())
+    }
+    fn calm(&self, q: &[f64], v: &[f64]) -> bool {
+        // As a chain's, over every chain.
+        self.pairs.is_empty() && (0..self.chains.len()).all(|k| self.chains[k].calm_at(&q[self.range(k)], &v[self.range(k)]))
+    }
+    fn set_definite_tangent(&mut self, on: bool) {
+        self.chains.iter_mut().for_each(|c| c.use_definite_tangent(on));
     }
     fn nonlinear_update(&mut self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) -> bool {
         let mut any = false;

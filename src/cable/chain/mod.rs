@@ -175,6 +175,16 @@ pub struct Chain {
     frozen: bool,
     /// Sub-joints with a non-smooth law (rebuilt with the layout).
     nonsmooth: Vec<u32>,
+    /// The last elimination met a negative pivot: the tangent with the
+    /// geometric stiffness of that iterate was indefinite (see
+    /// [`Chain::solve_into`]).
+    indefinite: bool,
+    /// An indefinite tangent is solved again without the geometric
+    /// stiffness ([`SecondOrderSystem::set_definite_tangent`](crate::integrate::SecondOrderSystem::set_definite_tangent)).
+    pub(super) definite_tangent: bool,
+    /// The elimination leaves the geometric stiffness out (set only while
+    /// an indefinite tangent is solved again).
+    without_geometric: bool,
 }
 
 impl std::fmt::Debug for Chain {
@@ -223,6 +233,9 @@ impl Chain {
             branch: Vec::new(),
             frozen: false,
             nonsmooth: Vec::new(),
+            indefinite: false,
+            definite_tangent: false,
+            without_geometric: false,
         }
     }
 

@@ -38,6 +38,12 @@ impl SecondOrderSystem for Chain {
     fn max_frequency(&self, _q: &[f64]) -> Option<f64> {
         self.max_frequency
     }
+    fn calm(&self, q: &[f64], v: &[f64]) -> bool {
+        self.calm_at(q, v)
+    }
+    fn set_definite_tangent(&mut self, on: bool) {
+        self.use_definite_tangent(on);
+    }
     fn position_tolerance(&self) -> f64 {
         self.position_tolerance
     }
@@ -103,7 +109,9 @@ impl SecondOrderSystem for Chain {
     /// slow Newton to a linear rate (docs/architecture.md, "Force
     /// elements").
     fn patient_newton(&self) -> bool {
-        !self.forces.is_empty() || !self.pairs.is_empty()
+        // The fallback for indefinite tangents converges linearly while it
+        // leaves the geometric stiffness out.
+        !self.forces.is_empty() || !self.pairs.is_empty() || self.definite_tangent
     }
     fn nonlinear_update(&mut self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) -> bool {
         // Only a chain closed by anchor springs needs it (an open chain's

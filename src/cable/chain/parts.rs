@@ -3,7 +3,7 @@
 
 use super::rotation_vector;
 use crate::cable::force::{spring_to, ForceElement, PointState, PointWrench};
-use glam::{DMat3, DVec3};
+use glam::{DMat3, DQuat, DVec3};
 use std::sync::Arc;
 
 /// Revolute or prismatic one-DOF joint.
@@ -194,7 +194,7 @@ impl BaseState {
 }
 
 /// A motion sampled at time `t0` and extrapolated from there with constant
-/// acceleration, the orientation held: what a coupling gives a rope end
+/// acceleration and constant angular velocity: what a coupling gives a rope end
 /// that follows a body another engine moves, refreshed before every step
 /// ([`Chain::set_sampled`](super::Chain::set_sampled)).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -204,24 +204,29 @@ pub struct SampledMotion {
     pub source: usize,
     /// Time of the sample, s.
     pub t0: f64,
-    /// Orientation (held).
+    /// Orientation at `t0`.
     pub rotation: DMat3,
     /// Position at `t0`, m.
     pub position: DVec3,
     /// Velocity at `t0`, m/s.
     pub velocity: DVec3,
-    /// Angular velocity (held), rad/s.
+    /// Angular velocity (world frame, held), rad/s.
     pub angular_velocity: DVec3,
     /// Acceleration (held), m/s².
     pub acceleration: DVec3,
 }
 
 impl SampledMotion {
-    /// The extrapolated state at time `t`, s.
+    /// The extrapolated state at time `t`, s: the orientation turns at the
+    /// angular velocity, `R(t) = exp([ω (t − t0)]×) R(t0)`. (Held instead,
+    /// a pinned rope end on a turning body counter-rotated at `−ω` in its
+    /// relative coordinates while its base stood still, and every new sample
+    /// swung the whole rope by `ω h` about the pin: 6e8 N·m of first
+    /// residual per sub-step in `examples/tow_rope.rs` while steering.)
     pub fn at(&self, t: f64) -> BaseState {
         let dt = t - self.t0;
         BaseState {
-            rotation: self.rotation,
+            rotation: DMat3::from_quat(DQuat::from_scaled_axis(self.angular_velocity * dt)) * self.rotation,
             position: self.position + self.velocity * dt + 0.5 * self.acceleration * dt * dt,
             angular_velocity: self.angular_velocity,
             velocity: self.velocity + self.acceleration * dt,

@@ -249,8 +249,61 @@ impl Chain {
         x: &mut [f64],
     ) -> Result<(), SystemError> {
         self.sweep(t, q, v, a, rhs, Some((c_v, c_q)))?;
-        self.forward_solve(x);
+        self.finish_solve(c_v, c_q, rhs, x)?;
         self.pair_correction(c_v, c_q, x)
+    }
+
+    /// The base-to-tip half of a fused pass's solve, or, when its
+    /// elimination found the tangent indefinite, the whole solve again
+    /// without the geometric stiffness (see [`Chain::solve_into`]).
+    pub(super) fn finish_solve(&mut self, c_v: f64, c_q: f64, rhs: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
+        if self.indefinite && self.definite_tangent {
+            self.solve_without_geometric(c_v, c_q, rhs, x)
+        } else {
+            self.forward_solve(x);
+            Ok(())
+        }
+    }
+
+    /// The tree's solve with the geometric stiffness left out:
+    /// `(M + c_v C + c_q K) x = b`.
+    fn solve_without_geometric(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
+        self.without_geometric = true;
+        let solved = self.solve_tree(c_v, c_q, b, x);
+        self.without_geometric = false;
+        self.indefinite = true;
+        solved
+    }
+
+    /// Whether the last elimination met an indefinite tangent (with
+    /// [`SecondOrderSystem::set_definite_tangent`](crate::integrate::SecondOrderSystem::set_definite_tangent)
+    /// on, the solve then left the geometric stiffness out).
+    pub fn last_solve_was_indefinite(&self) -> bool {
+        self.indefinite
+    }
+
+    /// Turns the fallback for indefinite tangents on or off (see
+    /// [`Chain::solve_into`]).
+    pub(crate) fn use_definite_tangent(&mut self, on: bool) {
+        self.definite_tangent = on;
+    }
+
+    /// Whether the state `(q, v)` is calm ([`SecondOrderSystem::calm`](crate::integrate::SecondOrderSystem::calm)):
+    /// no contact or other force element and no pair element acts, and
+    /// every tension-only element is stretched beyond `KINK_BAND` (the free
+    /// end of a hanging chain, near zero tension, is not). The integrator
+    /// retries a failed step with the fallback for indefinite tangents only
+    /// from and to calm states. Measured where it would otherwise apply: a
+    /// ball left a rope with 20 % more energy than it struck it with, a
+    /// capstan's slip ratio was 19 % off, a box crept under a push below its
+    /// friction limit, and `hanging_chain.toml`, released from a shape,
+    /// turned an element inside out.
+    pub(crate) fn calm_at(&self, q: &[f64], v: &[f64]) -> bool {
+        if !self.forces.is_empty() || !self.pairs.is_empty() || q.len() != self.joints.len() || v.len() != self.joints.len() {
+            return false;
+        }
+        let band = self.position_tolerance.max(crate::integrate::KINK_BAND);
+        self.nonsmooth.iter().all(|&s| self.joints[s as usize].taut_measure(q[s as usize], v[s as usize]) > band)
     }
 
     /// Forward kinematics, loads, and the tip-to-base sweep. Without
@@ -279,6 +332,7 @@ impl Chain {
     /// [`Chain::sweep`] after the kinematics pass: the loads and force
     /// elements, then the tip-to-base sweep.
     pub(super) fn sweep_loads(&mut self, t: f64, r: &mut [f64], solve: Option<(f64, f64)>) -> Result<(), SystemError> {
+        self.indefinite = false;
         let n = self.joints.len();
         for ld in &self.loads {
             let ps = &self.poses[ld.link];
@@ -363,7 +417,16 @@ impl Chain {
                 None => r[s] = res,
                 Some((c_v, c_q)) => {
                     r[s] = -res;
-                    self.eliminate(&mut aba, s, c_v, c_q, r)?;
+                    // With the fallback on, an indefinite tangent (a
+                    // negative pivot, or one that vanishes) stops the
+                    // elimination: the residual is finished, and the caller
+                    // solves again without the geometric stiffness.
+                    if !(self.indefinite && self.definite_tangent) {
+                        match self.eliminate(&mut aba, s, c_v, c_q, r) {
+                            Err(SystemError::Singular { .. }) if self.definite_tangent && !self.without_geometric => self.indefinite = true,
+                            other => other?,
+                        }
+                    }
                 }
             }
             if tree && self.limb_start[s] {
@@ -391,6 +454,24 @@ impl Chain {
     /// `Ĩ_s = I^A_s + c_q G_s`, which obeys the plain recursion
     /// `Ĩ_s = I_s + Ĩ_{s+1} − U_{s+1} U_{s+1}ᵀ / D_{s+1}`, and needs `G_s` only
     /// through `U_s = Ĩ_s S_s − c_q G_s S_s`: no 6×6 geometric block is formed.
+    ///
+    /// **An indefinite tangent can be solved without `K_g`.** `K_g` comes from
+    /// the composite loads at the iterate. Far from equilibrium (a stiff
+    /// anchor spring whose target moved a quarter millimetre past the
+    /// rope's predicted end pulls with about EA), the loads no longer balance
+    /// the joints' elastic forces. The shear slides and the rotations then
+    /// couple through a `K_g` larger than their own stiffness, and the
+    /// elimination meets a negative pivot. That direction turns soft modes
+    /// by radians: 12.8 rad of torsion in `examples/tow_rope.rs`. With the
+    /// fallback on ([`SecondOrderSystem::set_definite_tangent`](crate::integrate::SecondOrderSystem::set_definite_tangent),
+    /// which the integrator turns on only to retry a step whose Newton solve
+    /// failed), an elimination that meets a negative pivot (or a vanishing
+    /// one) runs again with `M + c_v C + c_q K`, which is positive definite.
+    /// The residual is unchanged, so the converged solution is the same;
+    /// only the iterates that find the tangent indefinite converge linearly.
+    /// Off (the default), an indefinite tangent is solved as it is: some
+    /// converging solves pass through indefinite iterates (a rope struck by
+    /// a body, a compressed rod) and need the exact tangent there.
     pub fn solve_into(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
         self.solve_tree(c_v, c_q, b, x)?;
         self.pair_correction(c_v, c_q, x)
@@ -399,6 +480,7 @@ impl Chain {
     /// [`Chain::solve_into`] without the pair elements' loop correction
     /// (the tree's own tangent, each pair point's stiffness on its link).
     pub(super) fn solve_tree(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
+        self.indefinite = false;
         let mut aba = AbaCarry::default();
         let tree = !self.limbs.is_empty();
         if tree {
@@ -411,7 +493,14 @@ impl Chain {
                 aba.inertia += c.inertia;
                 aba.bias += c.bias;
             }
-            self.eliminate(&mut aba, s, c_v, c_q, b)?;
+            let fallback = self.definite_tangent && !self.without_geometric;
+            match self.eliminate(&mut aba, s, c_v, c_q, b) {
+                Err(SystemError::Singular { .. }) if fallback => self.indefinite = true,
+                other => other?,
+            }
+            if self.indefinite && fallback {
+                return self.solve_without_geometric(c_v, c_q, b, x);
+            }
             if tree && self.limb_start[s] {
                 next_limb -= 1;
                 if let Some(p) = self.limbs[next_limb].parent {
@@ -512,21 +601,26 @@ impl Chain {
     /// single sub-joint, the second or third sub-joint of a rotation-spring
     /// block (only its link is added; the block is eliminated at its first
     /// sub-joint), or a whole block.
+    ///
+    /// A negative pivot marks the tangent indefinite ([`Chain::solve_into`]).
     fn eliminate(&mut self, aba: &mut AbaCarry, s: usize, c_v: f64, c_q: f64, b: &[f64]) -> Result<(), SystemError> {
         let slot = self.link_slot[s];
         if slot != u32::MAX {
             let ls = &self.links[slot as usize];
             aba.add_link(ls, &self.anchor_blocks, c_v, c_q);
         }
-        match self.block[s] {
-            u32::MAX => aba.down(s, &mut self.rows[s], c_v, c_q, b[s]),
-            BLOCK_INNER => Ok(()),
+        let c_g = if self.without_geometric { 0.0 } else { c_q };
+        let negative = match self.block[s] {
+            u32::MAX => aba.down(s, &mut self.rows[s], c_v, c_q, c_g, b[s])?,
+            BLOCK_INNER => false,
             k => {
                 let rs = &self.rotation_springs[k as usize];
                 let (a_mat, pinv) = &mut self.rot_scratch[k as usize];
-                aba.down_block(s, &mut self.rows[s..s + 3], rs, a_mat, pinv, c_v, c_q, [b[s], b[s + 1], b[s + 2]])
+                aba.down_block(s, &mut self.rows[s..s + 3], rs, a_mat, pinv, (c_v, c_q, c_g), [b[s], b[s + 1], b[s + 2]])?
             }
-        }
+        };
+        self.indefinite |= negative;
+        Ok(())
     }
 
     /// Base-to-tip half of the articulated-body solve.
@@ -638,8 +732,10 @@ struct AbaCarry {
 impl AbaCarry {
     /// One sub-joint of the backward sweep (see [`Chain::solve_into`]).
     #[inline]
-    fn down(&mut self, s: usize, row: &mut Row, c_v: f64, c_q: f64, b: f64) -> Result<(), SystemError> {
-        let uv = self.inertia.mul_motion(row.s) - row.gs * c_q;
+    /// `c_g` multiplies the geometric stiffness (`c_q`, or 0 to leave it
+    /// out). Answers whether the pivot is negative.
+    fn down(&mut self, s: usize, row: &mut Row, c_v: f64, c_q: f64, c_g: f64, b: f64) -> Result<bool, SystemError> {
+        let uv = self.inertia.mul_motion(row.s) - row.gs * c_g;
         let armature = c_v * row.damping + c_q * row.stiffness;
         let d = row.s.dot(uv) + armature;
         // The effective matrix may be indefinite (compression, large c_q);
@@ -654,7 +750,7 @@ impl AbaCarry {
         row.u = u;
         self.inertia.add_outer(uv, uv, -inv_d);
         self.bias += uv * (u * inv_d);
-        Ok(())
+        Ok(d < 0.0)
     }
 
     /// Adds a link's inertia (and implicit anchor springs).
@@ -694,11 +790,10 @@ impl AbaCarry {
         rs: &RotationSpring,
         a_mat: &DMat3,
         pinv: &mut DMat3,
-        c_v: f64,
-        c_q: f64,
+        (c_v, c_q, c_g): (f64, f64, f64),
         b: [f64; 3],
-    ) -> Result<(), SystemError> {
-        let u: [V6; 3] = [0, 1, 2].map(|k| self.inertia.mul_vec(f[k].s) - f[k].gs * c_q);
+    ) -> Result<bool, SystemError> {
+        let u: [V6; 3] = [0, 1, 2].map(|k| self.inertia.mul_vec(f[k].s) - f[k].gs * c_g);
         let mut p = [[0.0; 3]; 3];
         for k in 0..3 {
             for l in k..3 {
@@ -714,6 +809,10 @@ impl AbaCarry {
         if !det.is_finite() || det.abs() <= 1e-14 * scale {
             return Err(SystemError::Singular { index: s, pivot: det });
         }
+        // Sylvester's criterion: the block pivot is positive definite iff
+        // its leading minors are positive.
+        let (p11, p12, p22) = (pm.x_axis.x, pm.y_axis.x, pm.y_axis.y);
+        let negative = p11 <= 0.0 || p11 * p22 - p12 * p12 <= 0.0 || det <= 0.0;
         *pinv = pm.inverse();
         let ub = DVec3::new(b[0] - f[0].s.dot(self.bias), b[1] - f[1].s.dot(self.bias), b[2] - f[2].s.dot(self.bias));
         let y = *pinv * ub;
@@ -724,7 +823,7 @@ impl AbaCarry {
             self.inertia.add_outer(w, u[k], -1.0);
         }
         self.bias += u[0] * y.x + u[1] * y.y + u[2] * y.z;
-        Ok(())
+        Ok(negative)
     }
 }
 
