@@ -271,15 +271,7 @@ impl Chain {
         self.without_geometric = true;
         let solved = self.solve_tree(c_v, c_q, b, x);
         self.without_geometric = false;
-        self.indefinite = true;
         solved
-    }
-
-    /// Whether the last elimination met an indefinite tangent (with
-    /// [`SecondOrderSystem::set_definite_tangent`](crate::integrate::SecondOrderSystem::set_definite_tangent)
-    /// on, the solve then left the geometric stiffness out).
-    pub fn last_solve_was_indefinite(&self) -> bool {
-        self.indefinite
     }
 
     /// Turns the fallback for indefinite tangents on or off (see
@@ -421,9 +413,11 @@ impl Chain {
                     // negative pivot, or one that vanishes) stops the
                     // elimination: the residual is finished, and the caller
                     // solves again without the geometric stiffness.
+                    // (The fused sweep never runs without the geometric
+                    // stiffness: only `solve_tree` does.)
                     if !(self.indefinite && self.definite_tangent) {
                         match self.eliminate(&mut aba, s, c_v, c_q, r) {
-                            Err(SystemError::Singular { .. }) if self.definite_tangent && !self.without_geometric => self.indefinite = true,
+                            Err(SystemError::Singular { .. }) if self.definite_tangent => self.indefinite = true,
                             other => other?,
                         }
                     }
@@ -731,9 +725,9 @@ struct AbaCarry {
 
 impl AbaCarry {
     /// One sub-joint of the backward sweep (see [`Chain::solve_into`]).
-    #[inline]
     /// `c_g` multiplies the geometric stiffness (`c_q`, or 0 to leave it
     /// out). Answers whether the pivot is negative.
+    #[inline]
     fn down(&mut self, s: usize, row: &mut Row, c_v: f64, c_q: f64, c_g: f64, b: f64) -> Result<bool, SystemError> {
         let uv = self.inertia.mul_motion(row.s) - row.gs * c_g;
         let armature = c_v * row.damping + c_q * row.stiffness;
