@@ -342,13 +342,18 @@ fn a_carried_box_resting_on_the_ground_does_not_sink() {
 /// The same box on the ground with friction (bevy_rapier's default 0.5 on
 /// both colliders: μ = 0.5), pushed sideways (along z, across the rope's
 /// plane) by an `ExternalForce` at its centre: 0.3 m g for 2 s moves it
-/// only by its corners' stick springs (less than 0.1 mm, measured 18 µm)
-/// and then less than 1e-6 m over the last 1.5 s (measured 1.5e-7 m, the
-/// stick springs following the slack rope's swing; no creep: a friction
-/// law regularised at 1 mm/s would have moved it 1.5 mm),
+/// only by its corners' stick springs (less than 0.1 mm, measured 19 µm)
+/// and then less than 1e-6 m over the frames of the last 1.5 s in which
+/// the rope does not pull on it (measured 4.9e-8 m; no creep: a friction
+/// law regularised at 1 mm/s would have moved it 1.5 mm). The slack rope
+/// falling beside it snaps its end element taut for a few frames (up to
+/// 4.6 kN at 1.4 s, since a slack element no longer passes through zero
+/// length) and shifts the stuck box by 2.6 µm: a load, not creep,
+/// so those frames are left out,
 /// then 0.7 m g slides it
-/// at `(0.7 − μ) g` = 1.962 m/s², measured over the first 0.5 s of the
-/// slide (while the slack rope does not pull yet), within 2 %.
+/// at `(0.7 − μ) g` = 1.962 m/s², measured as the velocity's slope over
+/// the first 0.5 s of the slide after its first frame (while the slack
+/// rope does not pull yet), within 2 %.
 #[test]
 fn a_carried_box_on_the_ground_sticks_under_a_small_push_and_slides_under_a_large_one() {
     let mut app = app();
@@ -361,28 +366,44 @@ fn a_carried_box_on_the_ground_sticks_under_a_small_push_and_slides_under_a_larg
     }
     app.world_mut().get_mut::<ExternalForce>(crate_).unwrap().force = Vec3::Z * (0.3 * m * g) as f32;
     let z0 = z(&app);
-    let (mut deflection, mut z_half) = (0.0f64, 0.0);
+    let end_pull = |app: &App| app.world().get::<CableState>(cable).unwrap().tensions.last().copied().unwrap_or(0.0);
+    let (mut deflection, mut crept, mut jerks) = (0.0f64, 0.0f64, 0);
+    let mut last = (z(&app), end_pull(&app));
     for frame in 0..120 {
         app.update();
         deflection = deflection.max((z(&app) - z0).abs());
-        if frame == 29 {
-            z_half = z(&app);
+        let now = (z(&app), end_pull(&app));
+        if frame >= 30 {
+            // Creep: motion over the frames in which the slack rope does
+            // not pull on the box (its whip snaps the end element taut for
+            // a frame or two now and then, a real load on the box).
+            if last.1 == 0.0 && now.1 == 0.0 {
+                crept += now.0 - last.0;
+            } else {
+                jerks += 1;
+            }
         }
+        last = now;
     }
-    let crept = (z(&app) - z_half).abs();
     // Then with 0.7 m g.
     app.world_mut().get_mut::<ExternalForce>(crate_).unwrap().force = Vec3::Z * (0.7 * m * g) as f32;
     let z1 = z(&app);
-    for _ in 0..30 {
+    let vz = |app: &App| app.world().get::<Velocity>(crate_).unwrap().linear.z as f64;
+    app.update();
+    let v1 = vz(&app);
+    for _ in 1..30 {
         app.update();
     }
     let slid = z(&app) - z1;
-    let a = 2.0 * slid / 0.5f64.powi(2);
+    // The slope of the velocity after the first slipping frame (that frame
+    // gains 6.5 mm/s more than (0.7 − μ) g h as the stick spring lets go,
+    // with or without the rope; 2 slid/t² would count it in).
+    let a = (vz(&app) - v1) / (29.0 / 60.0);
     let expected = (0.7 - 0.5) * g;
     let sim = app.world().get::<CableSim>(cable).unwrap();
-    println!("0.3 m g: stick deflection {deflection:e} m, then moved {crept:e} m in 1.5 s; 0.7 m g: slid {slid:.5} m in 0.5 s, a = {a:.4} m/s² vs {expected:.4} ({:+.1e}); cable failed: {}", a / expected - 1.0, sim.failed);
+    println!("0.3 m g: stick deflection {deflection:e} m, then moved {crept:e} m in 1.5 s while the rope did not pull ({jerks} frames it did); 0.7 m g: slid {slid:.5} m in 0.5 s, a = {a:.4} m/s² vs {expected:.4} ({:+.1e}); cable failed: {}", a / expected - 1.0, sim.failed);
     assert!(!sim.failed);
     assert!(deflection < 1e-4, "moved {deflection} m under 0.3 m g");
-    assert!(crept < 1e-6, "crept {crept} m under 0.3 m g");
+    assert!(crept.abs() < 1e-6, "crept {crept} m under 0.3 m g");
     assert!((a / expected - 1.0).abs() < 0.02, "slid at {a} m/s², expected {expected}");
 }

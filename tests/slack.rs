@@ -194,9 +194,11 @@ fn elastic_catenary(span: f64, l0: f64, w: f64, ea: f64, s: f64) -> (f64, f64) {
     (sag, (h * h + (w * (0.5 * l0 - s)).powi(2)).sqrt())
 }
 
-/// The paths a user lays a 12 m rope on between pins 10 m apart: a V and a
-/// parabola (both of the rope's length; the V's vertex a 67° kink).
-fn slack_paths() -> [(&'static str, Vec<DVec3>); 2] {
+/// The paths a user lays a 12 m rope on between pins 10 m apart: a V, a
+/// parabola (both of the rope's length; the V's vertex a 67° kink), and a
+/// fold: out to 1 m past the far pin and back to it, the fold's vertex
+/// 5 cm or 30 cm below the line (a 177° and a 163° kink in one joint).
+fn slack_paths() -> [(&'static str, Vec<DVec3>); 4] {
     let v = vec![DVec3::ZERO, DVec3::new(5.0, -(36.0f64 - 25.0).sqrt(), 0.0), DVec3::new(10.0, 0.0, 0.0)];
     let parabola = |a: f64| {
         (0..=200)
@@ -207,28 +209,45 @@ fn slack_paths() -> [(&'static str, Vec<DVec3>); 2] {
             .collect::<Vec<_>>()
     };
     let length = |p: &[DVec3]| p.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>();
-    let (mut lo, mut hi) = (0.0, 1.0);
-    for _ in 0..60 {
+    let a = bisect(0.0, 1.0, |a| length(&parabola(a)) < 12.0);
+    [("V", v), ("parabola", parabola(a)), ("fold 5 cm", fold_path(0.05)), ("fold 30 cm", fold_path(0.3))]
+}
+
+/// The root of a monotone test in `[lo, hi]`: where `short(x)` (true
+/// below the root) turns false, by 100 halvings.
+fn bisect(mut lo: f64, mut hi: f64, short: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..100 {
         let mid = 0.5 * (lo + hi);
-        if length(&parabola(mid)) < 12.0 {
+        if short(mid) {
             lo = mid
         } else {
             hi = mid
         }
     }
-    [("V", v), ("parabola", parabola(0.5 * (lo + hi)))]
+    0.5 * (lo + hi)
+}
+
+/// A 12 m fold between pins at 0 and (10, 0, 0): out to a vertex
+/// `(x, −drop, 0)` past the far pin and back to it.
+fn fold_path(drop: f64) -> Vec<DVec3> {
+    let x = bisect(10.0, 12.0, |x| x.hypot(drop) + (x - 10.0).hypot(drop) < 12.0);
+    vec![DVec3::ZERO, DVec3::new(x, -drop, 0.0), DVec3::new(10.0, 0.0, 0.0)]
 }
 
 /// Issue 10, item 4: a 12 m steel rope and a 1 kg/m chain (EI 1e-3 N·m²)
-/// pinned 10 m apart, laid slack as a V or a parabola, released at the
+/// pinned 10 m apart, laid slack as a V, a parabola or a fold, released at the
 /// frame step with the default integrator and settled by velocity damping
 /// (2 /s, 12 s): mid-span sag within 1 % of the elastic catenary, the force
 /// on the pin within 1e-3 of the model's static equilibrium, and for the
 /// chain within 1 % of the catenary's end tension. (The steel rope's
 /// bending stiffness, EI ≈ 50 N·m² here, carries about 5 % of the load
 /// as a beam: its end force is 1.9 % below the perfectly flexible
-/// catenary's, in the static solve as in the dynamic run.) The V needs fine internal sub-steps while its kink whips open;
-/// the adaptive split gives them back once the motion calms.
+/// catenary's, in the static solve as in the dynamic run.) The V and the
+/// folds need fine internal sub-steps while their kinks whip open; the
+/// adaptive split gives them back once the motion calms. The steel folds
+/// run only since a slack element stops at zero length
+/// ([`SubJoint::stop`]): before, the fold's bending spring drove the
+/// elements beside it through zero length and inside out within 0.07 s.
 #[test]
 fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
     let chain = RopeSection { linear_density: 1.0, ea: 1e7, ei: 1e-3, ei2: 1e-3, gj: 1e-3, min_breaking_load: 0.0 };
@@ -429,33 +448,76 @@ fn static_solve_refuses_an_equilibrium_that_needs_the_rope_to_push() {
     assert!((tip - exact).abs() < 1e-9, "{tip} vs {exact}");
 }
 
-/// A tension-only element may shorten through zero length (a slack rope
-/// folds), but one turned inside out past its own length (`gap < −2 L_e`)
-/// would be a stretched element that its law, written for the slide's
-/// sign, takes as slack: it would lengthen without force (found on a
-/// damped chain whose tip element went slack and then hung inverted,
-/// 30 m long). The step refuses it by name and keeps the state.
+/// A tension-only element shortens freely down to zero length (a slack
+/// rope folds) and stops there ([`SubJoint::stop`] = −L_e): its two nodes
+/// meet and it pushes back with its axial stiffness. One set past zero
+/// length (−1.5 L_e, its nodes passed through each other) is pushed back
+/// out within the step. The sanity check behind the stop still refuses an
+/// element turned inside out past its own length (`gap < −2 L_e`): with the
+/// stop removed, such an element would be a stretched element that its
+/// law, written for the slide's sign, takes as slack, and it would
+/// lengthen without force (found on a damped chain whose tip element went
+/// slack and then hung inverted, 30 m long). The step refuses it by name
+/// and keeps the state.
 #[test]
 fn an_element_turned_inside_out_is_refused_not_left_to_stretch_freely() {
-    let attempt = |gap_in_lengths: f64| {
+    let attempt = |gap_in_lengths: f64, stop: bool| {
         let mut cable = payload_on_straight(20.0, 40, 10.0, true);
         let l = cable.model.layout;
         let s = l.dof(5, 3);
+        assert_eq!(cable.model.chain.joints()[s].stop, -l.element_length, "the axial slide's stop is at zero length");
+        if !stop {
+            cable.model.chain.joint_mut(s).unwrap().stop = f64::NEG_INFINITY;
+        }
         cable.state.q[s] = gap_in_lengths * l.element_length;
         cable.state.v.iter_mut().for_each(|v| *v = 0.0);
         let q = cable.state.q.clone();
         let r = cable.step(1.0 / 60.0);
-        (r, q, cable)
+        let gap = cable.state.q[s] / l.element_length;
+        (r, q, cable, gap)
     };
-    // Shorter than zero length but not longer than its rest length
-    // inverted: slack, legal.
-    let (ok, _, _) = attempt(-1.5);
-    assert!(ok.is_ok(), "a folded slack element was refused: {:?}", ok.err());
-    let (err, q, cable) = attempt(-2.5);
+    // Shortened, not through zero length: slack, legal, and it stays short
+    // (no force opens it within one step: it falls with the payload).
+    let (ok, _, _, gap) = attempt(-0.9, true);
+    assert!(ok.is_ok(), "a shortened slack element was refused: {:?}", ok.err());
+    assert!(gap < -0.85, "a slack element was pushed open: {gap} L_e");
+    // Through zero length: its stop pushes it back to zero length within
+    // the step (to 1e-3 L_e; measured 4e-5 L_e, the stop's give under the load).
+    let (ok, _, _, gap) = attempt(-1.5, true);
+    assert!(ok.is_ok(), "an element past its stop was refused: {:?}", ok.err());
+    println!("set at -1.5 L_e: {:+.3e} L_e from zero length after one step", gap + 1.0);
+    assert!(gap > -1.0 - 1e-3, "its stop did not push it back: {gap} L_e");
+    // Without the stop, inverted past its own length: refused.
+    let (err, q, cable, _) = attempt(-2.5, false);
     let e = err.expect_err("an element inverted past its own length was accepted");
     let message = e.to_string();
     println!("{message}");
     assert!(message.contains("element 5") && message.contains("inside out"), "{message}");
     assert_eq!(cable.state.q, q, "a refused step changed the state");
     assert_eq!(cable.time(), 0.0);
+}
+
+/// A fold laid flat (out to 1 m past the far pin and back along the same
+/// line: a 180° turn in one joint) is refused when the rope is built, with
+/// the place named: its two legs would lie inside each other, and the
+/// joint's bending law has no direction at 180° (the first step could not
+/// converge: "Newton did not converge at t = 0 s" at 256 sub-steps). Laid
+/// open by 5 mm it runs (the settle test above opens it by 5 and 30 cm).
+#[test]
+fn a_fold_laid_flat_is_refused_by_name() {
+    let build = |drop: f64| {
+        RopeBuilder::new(12.0, 48, steel20(), 0.02)
+            .start(RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO))))
+            .end(RopeEnd::Pinned(BaseMotion::point(DVec3::new(10.0, 0.0, 0.0))))
+            .path(fold_path(drop))
+            .build()
+    };
+    let err = build(0.0).expect_err("a flat fold was accepted");
+    let message = err.to_string();
+    println!("{message}");
+    assert!(message.contains("turns back on itself by 180.00° at 11.000 m along the rope (node 44"), "{message}");
+    let mut open = Cable::new(build(0.005).expect("a fold open by 5 mm"), Scheme::default()).unwrap();
+    for _ in 0..6 {
+        open.step(1.0 / 60.0).expect("the fold open by 5 mm steps");
+    }
 }

@@ -663,17 +663,7 @@ fn free_free_natural_frequencies_and_rigid_modes() {
         let model = steel_rod(n, 1e-5, RopeStart::Pinned(fixed(DMat3::IDENTITY, DVec3::ZERO)));
         let lay = model.layout;
         let src = &model.chain;
-        let free = |axis: DVec3| SubJoint {
-            kind: JointKind::Prismatic,
-            axis,
-            offset: DVec3::ZERO,
-            pre_rotation: DMat3::IDENTITY,
-            stiffness: 0.0,
-            damping: 0.0,
-            rest: 0.0,
-            link: None,
-            law: SpringLaw::Linear,
-        };
+        let free = |axis: DVec3| SubJoint::free(JointKind::Prismatic, axis);
         let mut joints = vec![free(DVec3::X), free(DVec3::Y), free(DVec3::Z)];
         joints.extend(src.joints().iter().cloned());
         let first = 3 + lay.first;

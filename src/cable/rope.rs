@@ -26,6 +26,11 @@ use super::material::RopeSection;
 use glam::{DMat3, DQuat, DVec3, EulerRot};
 use thiserror::Error;
 
+/// Largest turn (rad) of a rope's laid path at one node: 179.9°. A fold
+/// laid flat (180°) is refused ([`RopeBuilder::build`]); a fold laid open
+/// by 5 mm over 1 m legs (179.7°) runs.
+pub const FOLD_LIMIT: f64 = 179.9 * std::f64::consts::PI / 180.0;
+
 /// Sub-joints per rope element.
 pub const ELEMENT_DOFS: usize = 6;
 
@@ -474,6 +479,21 @@ impl RopeBuilder {
         if nodes[0].distance(start) > 1e-3 {
             return Err(RopeError::InvalidPath(format!("first path point {:?} is not the start anchor {:?}", nodes[0], start)));
         }
+        // A path that doubles back on itself within one node (a fold laid
+        // flat, its two legs on one line) would lie inside itself, and the
+        // joint's bending law (a rotation vector) has no direction at
+        // 180°: refused, naming the place.
+        for i in 1..n {
+            let (a, b) = ((nodes[i] - nodes[i - 1]).normalize(), (nodes[i + 1] - nodes[i]).normalize());
+            if a.dot(b) < FOLD_LIMIT.cos() {
+                return Err(RopeError::InvalidPath(format!(
+                    "the path turns back on itself by {:.2}° at {:.3} m along the rope (node {i}, at {:?}): its two legs would lie inside each other; open the fold by at least the rope's diameter",
+                    a.dot(b).clamp(-1.0, 1.0).acos().to_degrees(),
+                    i as f64 * le,
+                    nodes[i]
+                )));
+            }
+        }
         // Element frames by parallel transport (no initial twist).
         let mut rots = Vec::with_capacity(n);
         for i in 0..n {
@@ -512,6 +532,7 @@ impl RopeBuilder {
             rest: 0.0,
             link,
             law: SpringLaw::Linear,
+            stop: f64::NEG_INFINITY,
         };
         // Root: base frame and (for a trolley) its prismatic sub-joint.
         let (base, clamp_start, parent_rot, first_offset, start_body) = match &self.start {
@@ -560,6 +581,8 @@ impl RopeBuilder {
             let mut px = spring(JointKind::Prismatic, DVec3::X, s.ea / le, None);
             if self.tension_only {
                 px.law = SpringLaw::TensionOnly;
+                // A slack element shortens to zero length, not through it.
+                px.stop = -le;
             }
             let py = spring(JointKind::Prismatic, DVec3::Y, ga / le, None);
             let pz = spring(JointKind::Prismatic, DVec3::Z, ga / le, Some(element_mass));

@@ -169,9 +169,9 @@ pub struct Chain {
     /// Composite load on the whole chain at the last residual (spatial
     /// force about `origin`).
     base_load: V6,
-    /// Per sub-joint: the frozen branch of a non-smooth law (1 taut, 0
-    /// slack) while `frozen` (see [`SecondOrderSystem::freeze_branches`]).
-    branch: Vec<u8>,
+    /// Per sub-joint: the frozen branch of a non-smooth law while
+    /// `frozen` (see [`SecondOrderSystem::freeze_branches`]).
+    branch: Vec<LawBranch>,
     frozen: bool,
     /// Sub-joints with a non-smooth law (rebuilt with the layout).
     nonsmooth: Vec<u32>,

@@ -53,7 +53,7 @@ impl SecondOrderSystem for Chain {
         if self.assign_slots().is_err() || self.nonsmooth.is_empty() {
             return;
         }
-        self.branch.resize(self.joints.len(), 1);
+        self.branch.resize(self.joints.len(), LawBranch::Taut);
         // Taut unless both the step's start and the predictor are slack by
         // more than `TAUT_BAND` (or the position tolerance), in the law's
         // own measure `u + τ u̇` (a damped element unloading faster than its
@@ -68,7 +68,15 @@ impl SecondOrderSystem for Chain {
         for &s in &self.nonsmooth {
             let s = s as usize;
             let j = &self.joints[s];
-            self.branch[s] = u8::from(j.taut_measure(start.0[s], start.1[s]) >= -band || j.taut_measure(predicted.0[s], predicted.1[s]) >= -band);
+            self.branch[s] = if j.taut_measure(start.0[s], start.1[s]) >= -band || j.taut_measure(predicted.0[s], predicted.1[s]) >= -band {
+                LawBranch::Taut
+            } else if j.closed_measure(start.0[s], start.1[s]) < 0.0 || j.closed_measure(predicted.0[s], predicted.1[s]) < 0.0 {
+                // Shortened to zero length at the start or by the
+                // predictor: its nodes meet and it pushes back.
+                LawBranch::Closed
+            } else {
+                LawBranch::Slack
+            };
         }
         self.frozen = true;
     }
@@ -76,19 +84,20 @@ impl SecondOrderSystem for Chain {
         if !self.frozen {
             return 0;
         }
-        // A slack law that pulls moves to taut at once; a taut law moves to
-        // slack only once it pushes beyond the kink band (`KINK_BAND`).
-        // Within the band it is accepted taut anyway, and moving it would
-        // send the change down a rope near zero tension (its own weight
-        // only) one element per update.
+        // A slack law that pulls moves to taut at once (and one that has
+        // shortened through zero length to closed); a taut law moves to
+        // slack only once it pushes beyond the kink band (`KINK_BAND`), and
+        // a closed one once it pulls beyond it. Within the band it is
+        // accepted anyway, and moving it would send the change down a rope
+        // near zero tension (its own weight only) one element per update.
         let tol = self.position_tolerance;
         let band = tol.max(KINK_BAND);
         let mut moved = 0;
         for i in 0..self.nonsmooth.len() {
             let s = self.nonsmooth[i] as usize;
-            let limit = if self.branch[s] != 0 { band } else { tol };
+            let limit = if self.branch[s] != LawBranch::Slack { band } else { tol };
             if self.disagreement(s, q, v) > limit {
-                self.branch[s] ^= 1;
+                self.branch[s] = self.joints[s].branch_at(q[s], v[s]);
                 moved += 1;
             }
         }
@@ -237,15 +246,17 @@ impl Chain {
         Ok(iterations)
     }
 
-    /// How far (m or rad, [`SubJoint::taut_measure`]) the non-smooth law of
-    /// sub-joint `s` is on the other side of its kink from its frozen
-    /// branch at `(q, v)`; 0 when they agree.
+    /// How far (m or rad, [`SubJoint::taut_measure`] and
+    /// [`SubJoint::closed_measure`]) the non-smooth law of sub-joint `s` is
+    /// on the other side of a kink from its frozen branch at `(q, v)`; 0
+    /// when they agree.
     fn disagreement(&self, s: usize, q: &[f64], v: &[f64]) -> f64 {
-        let x = self.joints[s].taut_measure(q[s], v[s]);
-        if (self.branch[s] != 0) == (x > 0.0) {
-            0.0
-        } else {
-            x.abs()
+        let j = &self.joints[s];
+        let (taut, closed) = (j.taut_measure(q[s], v[s]), j.closed_measure(q[s], v[s]));
+        match self.branch[s] {
+            LawBranch::Taut => (-taut).max(0.0),
+            LawBranch::Closed => closed.max(0.0),
+            LawBranch::Slack => taut.max(-closed).max(0.0),
         }
     }
 
@@ -255,7 +266,7 @@ impl Chain {
             return;
         }
         self.branch.clear();
-        self.branch.resize(self.joints.len(), 1);
+        self.branch.resize(self.joints.len(), LawBranch::Taut);
         self.frozen = !self.nonsmooth.is_empty();
     }
 

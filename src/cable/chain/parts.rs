@@ -81,6 +81,29 @@ pub struct SubJoint {
     /// tension-only (a wire rope's axial slide: it cannot push). After
     /// changing it on a built chain, call [`Chain::invalidate_layout`](super::Chain::invalidate_layout).
     pub law: SpringLaw,
+    /// Extension `q − rest` (m or rad) below which a
+    /// [`SpringLaw::TensionOnly`] spring pushes back with its stiffness and
+    /// damping (the law's closed branch, [`LawBranch::Closed`]):
+    /// `−L_e` for a rope element's axial slide, so that a slack element
+    /// shortens freely down to zero length but cannot pass through it
+    /// (its two nodes meet). `f64::NEG_INFINITY` (the default) for none.
+    /// Ignored by linear laws.
+    pub stop: f64,
+}
+
+/// Which branch of a [`SpringLaw::TensionOnly`] law holds: what Newton
+/// freezes for a solve ([`SubJoint::spring_force_on_branch`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u8)]
+pub enum LawBranch {
+    /// No force (a slack rope element).
+    Slack = 0,
+    /// The linear law `k x + c v` (a taut element; every linear law).
+    #[default]
+    Taut = 1,
+    /// The linear law about the stop, `k (x − stop) + c v` (a slack
+    /// element shortened to zero length: its nodes meet and it pushes).
+    Closed = 2,
 }
 
 /// The force law of a sub-joint's spring and damper.
@@ -109,7 +132,18 @@ impl SubJoint {
     /// A sub-joint with no spring, no damper and no mass, about or along
     /// `axis` (unit) of its parent's frame: a free body's slide or turn.
     pub fn free(kind: JointKind, axis: DVec3) -> Self {
-        SubJoint { kind, axis, offset: DVec3::ZERO, pre_rotation: DMat3::IDENTITY, stiffness: 0.0, damping: 0.0, rest: 0.0, link: None, law: SpringLaw::Linear }
+        SubJoint {
+            kind,
+            axis,
+            offset: DVec3::ZERO,
+            pre_rotation: DMat3::IDENTITY,
+            stiffness: 0.0,
+            damping: 0.0,
+            rest: 0.0,
+            link: None,
+            law: SpringLaw::Linear,
+            stop: f64::NEG_INFINITY,
+        }
     }
 
     /// The spring + damper force at extension `q − rest` and rate `v`, and
@@ -117,24 +151,41 @@ impl SubJoint {
     /// N·m·s/rad).
     #[inline]
     pub fn spring_force(&self, q: f64, v: f64) -> (f64, f64, f64) {
-        self.spring_force_on_branch(q, v, self.is_taut(q, v))
+        self.spring_force_on_branch(q, v, self.branch_at(q, v))
     }
 
-    /// [`SubJoint::spring_force`] with the law held on one branch: `taut`
+    /// [`SubJoint::spring_force`] with the law held on one branch: taut
     /// gives the linear law whatever the sign of the extension, slack gives
-    /// zero (what Newton solves while the branches are frozen).
+    /// zero, closed gives the linear law about [`SubJoint::stop`] (what
+    /// Newton solves while the branches are frozen). Linear laws ignore
+    /// the branch.
     #[inline]
-    pub fn spring_force_on_branch(&self, q: f64, v: f64, taut: bool) -> (f64, f64, f64) {
-        match self.law {
-            SpringLaw::TensionOnly if !taut => (0.0, 0.0, 0.0),
+    pub fn spring_force_on_branch(&self, q: f64, v: f64, branch: LawBranch) -> (f64, f64, f64) {
+        match (self.law, branch) {
+            (SpringLaw::TensionOnly, LawBranch::Slack) => (0.0, 0.0, 0.0),
+            (SpringLaw::TensionOnly, LawBranch::Closed) => (self.stiffness * (q - self.rest - self.stop) + self.damping * v, self.stiffness, self.damping),
             _ => (self.stiffness * (q - self.rest) + self.damping * v, self.stiffness, self.damping),
+        }
+    }
+
+    /// The branch the law is on at `(q, v)`: always taut for a linear law;
+    /// a tension-only spring pulls when `k x + c v > 0`, pushes when
+    /// `k (x − stop) + c v < 0`, and is slack between.
+    #[inline]
+    pub fn branch_at(&self, q: f64, v: f64) -> LawBranch {
+        if self.law == SpringLaw::Linear || self.taut_measure(q, v) > 0.0 {
+            LawBranch::Taut
+        } else if self.closed_measure(q, v) < 0.0 {
+            LawBranch::Closed
+        } else {
+            LawBranch::Slack
         }
     }
 
     /// Whether the law is on its taut branch at `(q, v)` (always for a
     /// linear law; a tension-only spring pulls when `k x + c v > 0`).
     pub fn is_taut(&self, q: f64, v: f64) -> bool {
-        self.law == SpringLaw::Linear || self.taut_measure(q, v) > 0.0
+        self.branch_at(q, v) == LawBranch::Taut
     }
 
     /// `(k x + c v)/k` (m or rad): the extension the spring and damper pull
@@ -147,6 +198,13 @@ impl SubJoint {
         } else {
             x
         }
+    }
+
+    /// `(k (x − stop) + c v)/k` (m or rad): negative when a tension-only
+    /// law is on its closed branch (pushing back at its stop).
+    #[inline]
+    pub(crate) fn closed_measure(&self, q: f64, v: f64) -> f64 {
+        self.taut_measure(q, v) - self.stop
     }
 
     /// The joint frame (orientation, origin) in the frame of the parent
@@ -163,6 +221,7 @@ impl SubJoint {
     pub fn spring_energy(&self, q: f64) -> f64 {
         let x = q - self.rest;
         match self.law {
+            SpringLaw::TensionOnly if x < self.stop => 0.5 * self.stiffness * (x - self.stop) * (x - self.stop),
             SpringLaw::TensionOnly if x <= 0.0 => 0.0,
             _ => 0.5 * self.stiffness * x * x,
         }

@@ -172,7 +172,7 @@ impl Chain {
             let row = &mut self.rows[s];
             row.s = sv;
             let (elastic, stiffness, damping) =
-                if self.frozen && j.law != SpringLaw::Linear { j.spring_force_on_branch(q[s], v[s], self.branch[s] != 0) } else { j.spring_force(q[s], v[s]) };
+                if self.frozen && j.law != SpringLaw::Linear { j.spring_force_on_branch(q[s], v[s], self.branch[s]) } else { j.spring_force(q[s], v[s]) };
             row.stiffness = stiffness;
             row.damping = damping;
             row.elastic = elastic;
