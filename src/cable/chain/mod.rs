@@ -139,8 +139,9 @@ pub struct Chain {
     /// Per sub-joint: index of the rotation spring whose block starts here,
     /// [`BLOCK_INNER`] inside a block, `u32::MAX` for a single sub-joint.
     pub(crate) block: Vec<u32>,
-    /// Per rotation spring: `A = ∂θ/∂(a, b, c)` and the block pivot inverse.
-    pub(crate) rot_scratch: Vec<(DMat3, DMat3)>,
+    /// Per rotation spring: `A = ∂θ/∂(a, b, c)`, the block pivot inverse,
+    /// and the geometric part of the law's tangent.
+    pub(crate) rot_scratch: Vec<(DMat3, DMat3, DMat3)>,
     /// Rotation springs in the order of their last sub-joint (the
     /// kinematics pass evaluates each one there).
     spring_order: Vec<u32>,
@@ -185,6 +186,10 @@ pub struct Chain {
     /// The elimination leaves the geometric stiffness out (set only while
     /// an indefinite tangent is solved again).
     without_geometric: bool,
+    /// Set during a static solve: rotation-spring blocks then carry only
+    /// their law's Gauss–Newton part (positive semi-definite: the static
+    /// solve minimises the energy).
+    pub(crate) law_gauss_newton: bool,
 }
 
 impl std::fmt::Debug for Chain {
@@ -236,6 +241,7 @@ impl Chain {
             indefinite: false,
             definite_tangent: false,
             without_geometric: false,
+            law_gauss_newton: false,
         }
     }
 
@@ -338,7 +344,7 @@ impl Chain {
         // two links between them.
         self.block.clear();
         self.block.resize(n, u32::MAX);
-        self.rot_scratch.resize(self.rotation_springs.len(), (DMat3::ZERO, DMat3::ZERO));
+        self.rot_scratch.resize(self.rotation_springs.len(), (DMat3::ZERO, DMat3::ZERO, DMat3::ZERO));
         for (k, rs) in self.rotation_springs.iter().enumerate() {
             let f = rs.first;
             // A block never straddles a limb start or a limb's parent link.
@@ -871,7 +877,7 @@ impl Chain {
     pub(crate) fn elastic_forces(&self, q: &[f64], v: &[f64]) -> Vec<f64> {
         let mut out: Vec<f64> = self.joints.iter().enumerate().map(|(s, j)| j.spring_force(q[s], v[s]).0).collect();
         for rs in &self.rotation_springs {
-            let (forces, _) = rotation_spring_forces(rs, &self.joints, q, v);
+            let (forces, ..) = rotation_spring_forces(rs, &self.joints, q, v);
             out[rs.first..rs.first + 3].copy_from_slice(&forces);
         }
         out

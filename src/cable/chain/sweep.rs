@@ -210,11 +210,12 @@ impl Chain {
                     break;
                 }
                 next_spring += 1;
-                let (forces, a_mat) = rotation_spring_forces(&rs, &self.joints, q, v);
+                let (forces, a_mat, geometric) = rotation_spring_forces(&rs, &self.joints, q, v);
                 for (i, fi) in forces.iter().enumerate() {
                     self.rows[rs.first + i].elastic = *fi;
                 }
                 self.rot_scratch[k as usize].0 = a_mat;
+                self.rot_scratch[k as usize].2 = geometric;
             }
             if tree && self.limb_parent[s] != u32::MAX {
                 self.limb_acc[self.limb_parent[s] as usize] = acc;
@@ -609,8 +610,9 @@ impl Chain {
             BLOCK_INNER => false,
             k => {
                 let rs = &self.rotation_springs[k as usize];
-                let (a_mat, pinv) = &mut self.rot_scratch[k as usize];
-                aba.down_block(s, &mut self.rows[s..s + 3], rs, a_mat, pinv, (c_v, c_q, c_g), [b[s], b[s + 1], b[s + 2]])?
+                let (a_mat, pinv, geometric) = &mut self.rot_scratch[k as usize];
+                let c_law = if self.law_gauss_newton { 0.0 } else { c_g };
+                aba.down_block(s, &mut self.rows[s..s + 3], rs, (a_mat, geometric), pinv, (c_v, c_q, c_g, c_law), [b[s], b[s + 1], b[s + 2]])?
             }
         };
         self.indefinite |= negative;
@@ -676,12 +678,18 @@ impl Chain {
 /// `R₀ᵀ E_k` for its three axes.
 pub(super) fn rotation_deviation(rs: &RotationSpring, joints: &[SubJoint], q: &[f64]) -> (DVec3, [DVec3; 3]) {
     let f = rs.first;
+    deviation_at(rs, joints, [q[f], q[f + 1], q[f + 2]])
+}
+
+/// [`rotation_deviation`] at the spring's three angles `(a, b, c)`.
+fn deviation_at(rs: &RotationSpring, joints: &[SubJoint], angles: [f64; 3]) -> (DVec3, [DVec3; 3]) {
+    let f = rs.first;
     let rel = |a: f64, b: f64, c: f64| {
         let rz = rotate_about(DMat3::IDENTITY, DVec3::Z, a);
         let rzy = rotate_about(rz, DVec3::Y, b);
         (rz, rzy, rotate_about(rzy, DVec3::X, c))
     };
-    let (rz, rzy, r) = rel(q[f], q[f + 1], q[f + 2]);
+    let (rz, rzy, r) = rel(angles[0], angles[1], angles[2]);
     let rests = (joints[f].rest, joints[f + 1].rest, joints[f + 2].rest);
     if rests == (0.0, 0.0, 0.0) {
         return (rotation_vector(&r), [DVec3::Z, rz.y_axis, rzy.x_axis]);
@@ -692,27 +700,78 @@ pub(super) fn rotation_deviation(rs: &RotationSpring, joints: &[SubJoint], q: &[
     (theta, [r0t * DVec3::Z, r0t * rz.y_axis, r0t * rzy.x_axis])
 }
 
-/// A rotation spring's generalized forces on its three sub-joints and
-/// `A = ∂θ/∂(a, b, c)` (the columns `J_l⁻¹ R₀ᵀ E_k`).
-pub(super) fn rotation_spring_forces(rs: &RotationSpring, joints: &[SubJoint], q: &[f64], v: &[f64]) -> ([f64; 3], DMat3) {
+/// `β(φ²) = (1 − (φ/2)cot(φ/2))/φ²` of `J_l⁻¹`.
+#[inline]
+fn jinv_beta(phi2: f64) -> f64 {
+    if phi2 < 1e-6 {
+        1.0 / 12.0 + phi2 / 720.0
+    } else {
+        let phi = phi2.sqrt();
+        (1.0 - 0.5 * phi / (0.5 * phi).tan()) / phi2
+    }
+}
+
+/// `A = ∂θ/∂(a, b, c)` at the angles: the columns `J_l⁻¹(θ) R₀ᵀ E_k`.
+fn law_jacobian(rs: &RotationSpring, joints: &[SubJoint], angles: [f64; 3]) -> DMat3 {
+    let (theta, axes) = deviation_at(rs, joints, angles);
+    let beta = jinv_beta(theta.length_squared());
+    let jinv = |x: DVec3| x - 0.5 * theta.cross(x) + beta * theta.cross(theta.cross(x));
+    DMat3::from_cols(jinv(axes[0]), jinv(axes[1]), jinv(axes[2]))
+}
+
+/// Deviation (rad) above which a rotation spring's tangent includes the
+/// geometric part of its law ([`law_geometric_stiffness`]): below it that
+/// part is under `|θ|` of the Gauss–Newton part `AᵀKA`, which Newton does
+/// not notice.
+const LAW_GEOMETRIC_ANGLE: f64 = 1e-2;
+
+/// The geometric part of a rotation spring's tangent,
+/// `G_kl = m · ∂A_k/∂q_l` with the law's moment `m = Kθ + τKθ̇` held
+/// (symmetric: for the elastic part it is `Σ m_j ∇²θ_j`), by central
+/// differences of `A` over the three angles. The full tangent of the
+/// generalized forces `Q = Aᵀ m` is `AᵀKA + G`; `AᵀKA` alone (Gauss–Newton)
+/// is exact for bending in one plane (`A` constant) and for a law near its
+/// rest, and leaves out a term of the order of the moment for a rope bent
+/// in space, where Newton then crawled (a helix of 10 mm steel rope laid
+/// bent, not stress-free, needed 85–157 sub-steps per frame step).
+fn law_geometric_stiffness(rs: &RotationSpring, joints: &[SubJoint], q: &[f64], moment: DVec3) -> DMat3 {
+    let f = rs.first;
+    let angles = [q[f], q[f + 1], q[f + 2]];
+    let mut g = [[0.0; 3]; 3];
+    for l in 0..3 {
+        let eps = 1e-5 * (1.0 + angles[l].abs());
+        let (mut plus, mut minus) = (angles, angles);
+        plus[l] += eps;
+        minus[l] -= eps;
+        let d = (law_jacobian(rs, joints, plus) - law_jacobian(rs, joints, minus)) * (0.5 / eps);
+        for (k, row) in g.iter_mut().enumerate() {
+            row[l] = moment.dot(d.col(k));
+        }
+    }
+    let g = DMat3::from_cols_array_2d(&g).transpose();
+    (g + g.transpose()) * 0.5
+}
+
+/// A rotation spring's generalized forces on its three sub-joints,
+/// `A = ∂θ/∂(a, b, c)` (the columns `J_l⁻¹ R₀ᵀ E_k`), and the geometric part
+/// of its tangent ([`law_geometric_stiffness`]; zero within
+/// [`LAW_GEOMETRIC_ANGLE`] of the rest).
+pub(super) fn rotation_spring_forces(rs: &RotationSpring, joints: &[SubJoint], q: &[f64], v: &[f64]) -> ([f64; 3], DMat3, DMat3) {
     let (theta, axes) = rotation_deviation(rs, joints, q);
     let f = rs.first;
     let omega = axes[0] * v[f] + axes[1] * v[f + 1] + axes[2] * v[f + 2];
     // J_l⁻¹(θ) x = x − ½ θ×x + β θ×(θ×x), β = (1 − (φ/2)cot(φ/2))/φ²;
     // J_l⁻ᵀ(θ) = J_l⁻¹(−θ).
     let phi2 = theta.length_squared();
-    let beta = if phi2 < 1e-6 {
-        1.0 / 12.0 + phi2 / 720.0
-    } else {
-        let phi = phi2.sqrt();
-        (1.0 - 0.5 * phi / (0.5 * phi).tan()) / phi2
-    };
+    let beta = jinv_beta(phi2);
     let jinv = |x: DVec3, sign: f64| x - 0.5 * sign * theta.cross(x) + beta * theta.cross(theta.cross(x));
     let theta_dot = jinv(omega, 1.0);
     let moment = rs.k * theta + rs.k * theta_dot * rs.tau;
     // Q_k = (Kθ + τKθ̇)ᵀ J⁻¹ E_k = (J⁻ᵀ m)·E_k.
     let m = jinv(moment, -1.0);
-    ([m.dot(axes[0]), m.dot(axes[1]), m.dot(axes[2])], DMat3::from_cols(jinv(axes[0], 1.0), jinv(axes[1], 1.0), jinv(axes[2], 1.0)))
+    let a = DMat3::from_cols(jinv(axes[0], 1.0), jinv(axes[1], 1.0), jinv(axes[2], 1.0));
+    let geometric = if phi2 > LAW_GEOMETRIC_ANGLE * LAW_GEOMETRIC_ANGLE { law_geometric_stiffness(rs, joints, q, moment) } else { DMat3::ZERO };
+    ([m.dot(axes[0]), m.dot(axes[1]), m.dot(axes[2])], a, geometric)
 }
 
 /// Tip-to-base state of the articulated-body solve: the shifted
@@ -774,7 +833,8 @@ impl AbaCarry {
 
     /// Three coupled revolute sub-joints (a rotation spring) eliminated
     /// together with a 3×3 pivot: `P_kl = S_k·U_l` (k ≤ l, symmetric) plus
-    /// the law's Gauss–Newton stiffness `(c_q + c_v τ) Aᵀ K A`, with
+    /// the law's Gauss–Newton stiffness `(c_q + c_v τ) Aᵀ K A` and its
+    /// geometric part `c_q G` ([`law_geometric_stiffness`]), with
     /// `U_k = Ĩ S_k − c_q G_k S_k` (no mass sits between the three).
     #[allow(clippy::too_many_arguments)]
     fn down_block(
@@ -782,9 +842,9 @@ impl AbaCarry {
         s: usize,
         f: &mut [Row],
         rs: &RotationSpring,
-        a_mat: &DMat3,
+        (a_mat, geometric): (&DMat3, &DMat3),
         pinv: &mut DMat3,
-        (c_v, c_q, c_g): (f64, f64, f64),
+        (c_v, c_q, c_g, c_law): (f64, f64, f64, f64),
         b: [f64; 3],
     ) -> Result<bool, SystemError> {
         let u: [V6; 3] = [0, 1, 2].map(|k| self.inertia.mul_vec(f[k].s) - f[k].gs * c_g);
@@ -796,7 +856,10 @@ impl AbaCarry {
             }
         }
         let ka = DMat3::from_cols(a_mat.x_axis * rs.k, a_mat.y_axis * rs.k, a_mat.z_axis * rs.k);
-        let h = a_mat.transpose() * ka * (c_q + c_v * rs.tau);
+        // The law's geometric part (`c_law`: `c_q`, or 0 in static solves)
+        // goes with the chain's geometric stiffness (left out, with it, by
+        // the definite fallback).
+        let h = a_mat.transpose() * ka * (c_q + c_v * rs.tau) + *geometric * c_law;
         let pm = DMat3::from_cols_array_2d(&p) + h;
         let det = pm.determinant();
         let scale = pm.x_axis.length() * pm.y_axis.length() * pm.z_axis.length();
