@@ -111,7 +111,7 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 31] = [
+const COMPARED: [&str; 32] = [
     "axial_bounce",
     "ball_hits_payload",
     "ball_on_rope",
@@ -138,6 +138,7 @@ const COMPARED: [&str; 31] = [
     "rope_on_rope",
     "rope_on_slope",
     "rope_over_cylinder",
+    "rope_round_post",
     "spin_up",
     "taut_string",
     "trolley_kick",
@@ -189,6 +190,7 @@ same_rows!(
     rope_on_rope,
     rope_on_slope,
     rope_over_cylinder,
+    rope_round_post,
     spin_up,
     taut_string,
     trolley_kick,
