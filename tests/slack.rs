@@ -197,7 +197,7 @@ fn elastic_catenary(span: f64, l0: f64, w: f64, ea: f64, s: f64) -> (f64, f64) {
 /// The paths a user lays a 12 m rope on between pins 10 m apart: a V, a
 /// parabola (both of the rope's length; the V's vertex a 67° kink), and a
 /// fold: out to 1 m past the far pin and back to it, the fold's vertex
-/// 5 cm or 30 cm below the line (a 177° and a 163° kink in one joint).
+/// 5 cm or 30 cm below the line (a 177° and a 164° kink in one joint).
 fn slack_paths() -> [(&'static str, Vec<DVec3>); 4] {
     let v = vec![DVec3::ZERO, DVec3::new(5.0, -(36.0f64 - 25.0).sqrt(), 0.0), DVec3::new(10.0, 0.0, 0.0)];
     let parabola = |a: f64| {
