@@ -25,7 +25,7 @@ fn the_builder_has_documented_defaults_and_sets_what_it_names() {
     assert_eq!(d.material, RopeMaterial::steel_6x36_iwrc(0.02));
     assert_eq!(d.material.section(), preset("steel_wire_rope_6x36_iwrc", 0.02).unwrap());
     assert_eq!((d.start.clone(), d.end.clone()), (CableAnchor::world(Vec3::ZERO), CableAnchor::Free));
-    assert!(d.tension_only && d.damping == 0.0 && d.static_start.is_none() && d.loads.is_empty());
+    assert!(d.tension_only && d.damping == 0.0 && d.static_start.is_none() && d.loads.is_empty() && !d.stress_free);
     let body = Entity::from_raw_u32(7).unwrap();
     let d = d
         .segments(30)
@@ -33,6 +33,7 @@ fn the_builder_has_documented_defaults_and_sets_what_it_names() {
         .start(CableAnchor::world_clamped(Vec3::Y))
         .end(CableAnchor::body(body, Vec3::Y * 0.5))
         .path([Vec3::Y, Vec3::ZERO])
+        .stress_free(true)
         .damping(0.25)
         .tension_only(false)
         .scheme(Scheme::Newmark { beta: 0.25, gamma: 0.5 })
@@ -43,6 +44,7 @@ fn the_builder_has_documented_defaults_and_sets_what_it_names() {
     assert_eq!(d.start, CableAnchor::World { point: Vec3::Y, clamp: true });
     assert_eq!(d.end, CableAnchor::Body { entity: body, anchor: Vec3::Y * 0.5, clamp: false });
     assert_eq!(d.path.as_deref(), Some(&[Vec3::Y, Vec3::ZERO][..]));
+    assert!(d.stress_free);
     assert_eq!((d.damping, d.tension_only, d.static_start), (0.25, false, Some(5)));
     assert_eq!(d.loads[0].s, 6.0);
     assert_eq!(d.loads[0].force.y, -100.0);

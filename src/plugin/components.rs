@@ -296,9 +296,24 @@ impl CableDescriptor {
         self
     }
 
-    /// Sets the initial centreline (world, m; the `path` field).
+    /// Sets the initial centreline (world, m; the `path` field). Unless
+    /// [`stress_free`](Self::stress_free) is set, a curved path is a bent,
+    /// stressed state of a straight rope, which springs back when
+    /// released (a rope laid strongly bent between two posts whips and may
+    /// fail to converge). A path that turns back on itself by more than
+    /// 179.9° at one node (a fold laid flat) is refused with a
+    /// [`CableError`] naming the place.
     pub fn path(mut self, path: impl IntoIterator<Item = Vec3>) -> Self {
         self.path = Some(path.into_iter().collect());
+        self
+    }
+
+    /// Whether the initial path is the rope's unstressed shape (the
+    /// `stress_free` field; default `false`: the rope is straight when
+    /// unstressed). Set it for a pre-curved rope, a kinked wire, or a
+    /// rope laid round a post that should not spring off it.
+    pub fn stress_free(mut self, yes: bool) -> Self {
+        self.stress_free = yes;
         self
     }
 
