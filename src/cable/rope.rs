@@ -479,25 +479,24 @@ impl RopeBuilder {
         if nodes[0].distance(start) > 1e-3 {
             return Err(RopeError::InvalidPath(format!("first path point {:?} is not the start anchor {:?}", nodes[0], start)));
         }
-        // A path that doubles back on itself within one node (a fold laid
-        // flat, its two legs on one line) would lie inside itself, and the
-        // joint's bending law (a rotation vector) has no direction at
-        // 180°: refused, naming the place.
-        for i in 1..n {
-            let (a, b) = ((nodes[i] - nodes[i - 1]).normalize(), (nodes[i + 1] - nodes[i]).normalize());
-            if a.dot(b) < FOLD_LIMIT.cos() {
+        // Element frames by parallel transport (no initial twist).
+        let mut rots = Vec::with_capacity(n);
+        let mut last = DVec3::ZERO;
+        for i in 0..n {
+            let d = (nodes[i + 1] - nodes[i]).normalize();
+            // A path that doubles back on itself within one node (a fold
+            // laid flat, its two legs on one line) would lie inside itself,
+            // and the joint's bending law (a rotation vector) has no
+            // direction at 180°: refused, naming the place.
+            if last.dot(d) < FOLD_LIMIT.cos() {
                 return Err(RopeError::InvalidPath(format!(
                     "the path turns back on itself by {:.2}° at {:.3} m along the rope (node {i}, at {:?}): its two legs would lie inside each other; open the fold by at least the rope's diameter",
-                    a.dot(b).clamp(-1.0, 1.0).acos().to_degrees(),
+                    last.dot(d).clamp(-1.0, 1.0).acos().to_degrees(),
                     i as f64 * le,
                     nodes[i]
                 )));
             }
-        }
-        // Element frames by parallel transport (no initial twist).
-        let mut rots = Vec::with_capacity(n);
-        for i in 0..n {
-            let d = (nodes[i + 1] - nodes[i]).normalize();
+            last = d;
             let r = if i == 0 {
                 let helper = if d.y.abs() < 0.9 { DVec3::Y } else { DVec3::X };
                 let z = d.cross(helper).normalize();

@@ -860,7 +860,7 @@ impl Chain {
     pub fn joint_moment(&self, first: usize, q: &[f64], v: &[f64]) -> DVec3 {
         let linear = |s: usize| self.joints[s].spring_force(q[s], v[s]).0;
         let forces = match self.rotation_springs.binary_search_by_key(&first, |r| r.first) {
-            Ok(k) => rotation_spring_forces(&self.rotation_springs[k], &self.joints, q, v).0,
+            Ok(k) => rotation_spring_forces(&self.rotation_springs[k], &self.joints, q, v, false).0,
             Err(_) => [linear(first), linear(first + 1), linear(first + 2)],
         };
         let axes = DMat3::from_cols(self.rows[first].s.top, self.rows[first + 1].s.top, self.rows[first + 2].s.top);
@@ -877,7 +877,7 @@ impl Chain {
     pub(crate) fn elastic_forces(&self, q: &[f64], v: &[f64]) -> Vec<f64> {
         let mut out: Vec<f64> = self.joints.iter().enumerate().map(|(s, j)| j.spring_force(q[s], v[s]).0).collect();
         for rs in &self.rotation_springs {
-            let (forces, ..) = rotation_spring_forces(rs, &self.joints, q, v);
+            let (forces, ..) = rotation_spring_forces(rs, &self.joints, q, v, false);
             out[rs.first..rs.first + 3].copy_from_slice(&forces);
         }
         out

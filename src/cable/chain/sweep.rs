@@ -210,7 +210,7 @@ impl Chain {
                     break;
                 }
                 next_spring += 1;
-                let (forces, a_mat, geometric) = rotation_spring_forces(&rs, &self.joints, q, v);
+                let (forces, a_mat, geometric) = rotation_spring_forces(&rs, &self.joints, q, v, true);
                 for (i, fi) in forces.iter().enumerate() {
                     self.rows[rs.first + i].elastic = *fi;
                 }
@@ -711,12 +711,24 @@ fn jinv_beta(phi2: f64) -> f64 {
     }
 }
 
-/// `A = ∂θ/∂(a, b, c)` at the angles: the columns `J_l⁻¹(θ) R₀ᵀ E_k`.
+/// `J_l⁻¹(θ) x = x − ½ θ×x + β θ×(θ×x)` (`sign` = 1), or
+/// `J_l⁻ᵀ(θ) x = J_l⁻¹(−θ) x` (`sign` = −1), with `β` from [`jinv_beta`].
+#[inline]
+fn jinv(theta: DVec3, beta: f64, x: DVec3, sign: f64) -> DVec3 {
+    x - 0.5 * sign * theta.cross(x) + beta * theta.cross(theta.cross(x))
+}
+
+/// `A = ∂θ/∂(a, b, c)`: the columns `J_l⁻¹(θ) R₀ᵀ E_k` for the deviation
+/// `θ` and the axes `R₀ᵀ E_k` of [`rotation_deviation`].
+#[inline]
+fn jacobian_of(theta: DVec3, beta: f64, axes: &[DVec3; 3]) -> DMat3 {
+    DMat3::from_cols(jinv(theta, beta, axes[0], 1.0), jinv(theta, beta, axes[1], 1.0), jinv(theta, beta, axes[2], 1.0))
+}
+
+/// `A = ∂θ/∂(a, b, c)` at the spring's three angles.
 fn law_jacobian(rs: &RotationSpring, joints: &[SubJoint], angles: [f64; 3]) -> DMat3 {
     let (theta, axes) = deviation_at(rs, joints, angles);
-    let beta = jinv_beta(theta.length_squared());
-    let jinv = |x: DVec3| x - 0.5 * theta.cross(x) + beta * theta.cross(theta.cross(x));
-    DMat3::from_cols(jinv(axes[0]), jinv(axes[1]), jinv(axes[2]))
+    jacobian_of(theta, jinv_beta(theta.length_squared()), &axes)
 }
 
 /// Deviation (rad) above which a rotation spring's tangent includes the
@@ -753,25 +765,23 @@ fn law_geometric_stiffness(rs: &RotationSpring, joints: &[SubJoint], q: &[f64], 
 }
 
 /// A rotation spring's generalized forces on its three sub-joints,
-/// `A = ∂θ/∂(a, b, c)` (the columns `J_l⁻¹ R₀ᵀ E_k`), and the geometric part
-/// of its tangent ([`law_geometric_stiffness`]; zero within
-/// [`LAW_GEOMETRIC_ANGLE`] of the rest).
-pub(super) fn rotation_spring_forces(rs: &RotationSpring, joints: &[SubJoint], q: &[f64], v: &[f64]) -> ([f64; 3], DMat3, DMat3) {
+/// `A = ∂θ/∂(a, b, c)` (the columns `J_l⁻¹ R₀ᵀ E_k`), and, when `geometric`
+/// is asked for (the solve's tangent; readouts do not need it), the
+/// geometric part of its tangent ([`law_geometric_stiffness`]; zero within
+/// [`LAW_GEOMETRIC_ANGLE`] of the rest, and when not asked for).
+pub(super) fn rotation_spring_forces(rs: &RotationSpring, joints: &[SubJoint], q: &[f64], v: &[f64], geometric: bool) -> ([f64; 3], DMat3, DMat3) {
     let (theta, axes) = rotation_deviation(rs, joints, q);
     let f = rs.first;
     let omega = axes[0] * v[f] + axes[1] * v[f + 1] + axes[2] * v[f + 2];
-    // J_l⁻¹(θ) x = x − ½ θ×x + β θ×(θ×x), β = (1 − (φ/2)cot(φ/2))/φ²;
-    // J_l⁻ᵀ(θ) = J_l⁻¹(−θ).
     let phi2 = theta.length_squared();
     let beta = jinv_beta(phi2);
-    let jinv = |x: DVec3, sign: f64| x - 0.5 * sign * theta.cross(x) + beta * theta.cross(theta.cross(x));
-    let theta_dot = jinv(omega, 1.0);
+    let theta_dot = jinv(theta, beta, omega, 1.0);
     let moment = rs.k * theta + rs.k * theta_dot * rs.tau;
     // Q_k = (Kθ + τKθ̇)ᵀ J⁻¹ E_k = (J⁻ᵀ m)·E_k.
-    let m = jinv(moment, -1.0);
-    let a = DMat3::from_cols(jinv(axes[0], 1.0), jinv(axes[1], 1.0), jinv(axes[2], 1.0));
-    let geometric = if phi2 > LAW_GEOMETRIC_ANGLE * LAW_GEOMETRIC_ANGLE { law_geometric_stiffness(rs, joints, q, moment) } else { DMat3::ZERO };
-    ([m.dot(axes[0]), m.dot(axes[1]), m.dot(axes[2])], a, geometric)
+    let m = jinv(theta, beta, moment, -1.0);
+    let a = jacobian_of(theta, beta, &axes);
+    let g = if geometric && phi2 > LAW_GEOMETRIC_ANGLE * LAW_GEOMETRIC_ANGLE { law_geometric_stiffness(rs, joints, q, moment) } else { DMat3::ZERO };
+    ([m.dot(axes[0]), m.dot(axes[1]), m.dot(axes[2])], a, g)
 }
 
 /// Tip-to-base state of the articulated-body solve: the shifted
