@@ -1724,7 +1724,7 @@ pub fn contact_passes(approach: f64, h: f64) -> u32 {
 pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
     for cc in cables.iter_mut() {
         for end in std::mem::take(&mut cc.free_ends) {
-            put_free_body(end, bodies);
+            put_free_body(end, bodies, colliders, narrow_phase);
         }
         for k in 0..cc.carried.len() {
             let (p, r, v, w) = cc.carried_state(&cc.carried[k]);
@@ -1760,25 +1760,36 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
 }
 
 /// A free body the ropes of an island touched, after rapier's step: if
-/// rapier changed nothing but what the island's solve already holds (its
-/// velocities are the island's end velocities: no contact of rapier's, no
-/// joint, pushed it), it is put on the pose the island's solve left it
-/// at. Rapier integrates the ropes' impulse as a kick at the step's start
+/// rapier changed nothing but what the island's solve already holds (no
+/// active contact of rapier's touches it, it has no damping, and its
+/// linear velocity is the island's end velocity: no joint pulled it), it
+/// is put on the pose and the velocities the island's solve left it at.
+/// Rapier integrates the ropes' impulse as a kick at the step's start
 /// (then gravity over its sub-steps), the island as forces over the step:
 /// a 20 kg ball resting on a rope ended each 1/60 s step 1.2 mm higher in
 /// rapier than in the island, met the rope at the next step's start
 /// moving down at 6 cm/s, and bounced on it for ever (docs/architecture.md,
-/// "Free bodies on ropes"). A body rapier did move (or damped: rapier's
-/// damping changes its velocity too) keeps rapier's pose.
-fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet) {
+/// "Free bodies on ropes"). The angular velocity is not compared: rapier's
+/// explicit gyroscopic term turns a spinning box's angular velocity away
+/// from the island's exact one, and a box that kept rapier's pose for that
+/// met the ropes out of place at the next step (crates on a rope bridge
+/// thrown up at 3 m/s). A body rapier did move (or damped) keeps rapier's
+/// pose and velocities.
+fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
     let Some(rb) = bodies.get_mut(end.handle) else {
         return;
     };
     let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-5 * (1.0 + b.length());
-    if !(close(rb.linvel().as_dvec3(), end.velocity) && close(rb.angvel().as_dvec3(), end.angular_velocity)) {
+    let touched =
+        rb.colliders().iter().filter(|h| colliders.get(**h).is_some()).any(|h| narrow_phase.contact_pairs_with(*h).any(|p| p.has_any_active_contact()));
+    if rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0 || !(touched || close(rb.linvel().as_dvec3(), end.velocity)) {
         return;
     }
     rb.set_position(rp::Pose::from_parts(end.origin.as_vec3(), DQuat::from_mat3(&end.rotation).normalize().as_quat()), false);
+    if !touched {
+        rb.set_linvel(end.velocity.as_vec3(), false);
+        rb.set_angvel(end.angular_velocity.as_vec3(), false);
+    }
 }
 
 /// What [`build_cables`] made of one spec.
