@@ -174,6 +174,28 @@ fn cable_impact_runs_headless() {
     assert!(speed < 5.0, "hook speed {speed} m/s");
 }
 
+/// The rope bridge, headless: 50 frames (0.83 s). The first crate, let go
+/// at rest 0.7 m above the pins, has struck the two sagging ropes at about
+/// 3.5 m/s and rides them (its centre between 1.6 and 2.2 m: not through
+/// them, not thrown off); the second, let go at 0.7 s, is still falling.
+/// The ropes' largest tension lies between the crate's static share
+/// (about 0.7 kN per rope) and 20 kN. The full drop series (six crates,
+/// stacking, one removed) runs in `plugin_contact.rs`.
+#[cfg(feature = "demo")]
+#[test]
+fn rope_bridge_runs_headless() {
+    let line = &report_line("rope_bridge", "50", "rope_bridge: t = 0.83 s");
+    let (on, low, high, tension) = (
+        value_after(line, "crates on the bridge = "),
+        value_after(line, "lowest crate y = "),
+        value_after(line, "highest crate y = "),
+        value_after(line, "largest tension = "),
+    );
+    assert_eq!(on, 1.0, "{line}");
+    assert!(low > 1.6 && high < 2.2, "{line}");
+    assert!((0.7..20.0).contains(&tension), "largest tension {tension} kN");
+}
+
 /// `cablesim view --headless N` steps a scenario as `cablesim run` does:
 /// the probes it prints after 1 s are `run`'s results.csv row at 1 s.
 #[cfg(all(feature = "demo", feature = "cli"))]
