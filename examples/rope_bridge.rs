@@ -14,11 +14,15 @@
 //!   marker along the span;
 //! * C: remove the crates; R: reset (ropes and crates respawned);
 //! * mouse drag: orbit the camera; mouse wheel: zoom;
-//! * T: tension colours on/off; G: node gizmos on/off.
+//! * T: tension colours on/off; G: gizmos on/off (nodes, and each
+//!   contact's point and force on the rope: 1 kN drawn 3 m long).
 //!
 //! The HUD shows the crates on the bridge, the ropes' largest tension and
 //! the middle's sag. While crates land and stack the step is slower than
-//! real time (docs/performance.md, "Dynamic bodies on ropes").
+//! real time (about 0.4× over a series of six; a dozen piled on the bridge
+//! 0.05×: docs/performance.md, "Dynamic bodies on ropes"). The ropes are
+//! damped (0.05 s): undamped, they ring after every landing and can stop
+//! (docs/embedding.md, "Contact and friction").
 //!
 //! Options:
 //! * `--headless N`: no window and no renderer: N fixed steps of 1/60 s
@@ -28,12 +32,13 @@
 //!   largest tension (used by `tests/examples_headless.rs`).
 //! * `--screenshot FILE.png`: the same drops, a screenshot 4.5 s in, then
 //!   exit.
+//! * `--gizmos`: the gizmos on from the start.
 
 use bevy::prelude::*;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier_cable::cable::RopeMaterial;
 use bevy_rapier_cable::demo_support::*;
-use bevy_rapier_cable::plugin::render::CableRender;
+use bevy_rapier_cable::plugin::render::{CableGizmos, CableRender};
 use bevy_rapier_cable::plugin::*;
 
 /// Half the span between the posts' pins, m.
@@ -55,10 +60,10 @@ const DROPS: [(f32, f32); 6] = [(0.0, 0.0), (0.7, 0.8), (1.4, -0.8), (2.1, 1.5),
 /// `--headless`: when the first crate is removed, s.
 const REMOVE_AT: f32 = 6.0;
 
-const USAGE: &str = "usage: rope_bridge [--headless FRAMES] [--screenshot FILE.png]";
+const USAGE: &str = "usage: rope_bridge [--headless FRAMES] [--screenshot FILE.png] [--gizmos]";
 
 fn main() {
-    let mut options = DemoOptions::from_args_or_exit(USAGE);
+    let (mut options, flags) = DemoOptions::from_args_with_flags_or_exit(USAGE, &["--gizmos"]);
     options.screenshot_after = 4.5;
     let scripted = options.headless.is_some() || options.screenshot.is_some();
     let mut app = demo_app("bevy_rapier_cable: rope bridge", &options);
@@ -66,6 +71,8 @@ fn main() {
         app.add_systems(FixedUpdate, headless_report.after(CableSystems::Readout));
     } else {
         app.add_systems(Startup, setup_scene).add_systems(Update, (drop_keys, clear_keys, reset_rig(spawn_ropes), look_keys(RED_AT), hud, show_marker));
+        let on = flags.contains(&"--gizmos");
+        app.add_systems(Startup, move |store: ResMut<GizmoConfigStore>| gizmos(store, on));
     }
     if scripted {
         app.add_systems(FixedUpdate, scripted_drops.before(CableSystems::Step));
@@ -227,6 +234,14 @@ fn setup_scene(mut commands: Commands, mut meshes: ResMut<Assets<Mesh>>, mut mat
         MeshMaterial3d(materials.add(StandardMaterial { base_color: Color::srgba(0.95, 0.8, 0.2, 0.5), alpha_mode: AlphaMode::Blend, ..default() })),
         Transform::from_xyz(0.0, PIN_Y + DROP_HEIGHT + CRATE.0.y, 0.0),
     ));
+}
+
+/// The cable gizmos: a crate's contact forces are tens of newtons each,
+/// so 1 kN is drawn 3 m long; on from the start with `--gizmos`.
+fn gizmos(mut store: ResMut<GizmoConfigStore>, on: bool) {
+    let (config, ext) = store.config_mut::<CableGizmos>();
+    config.enabled = on;
+    ext.force_scale = 3e-3;
 }
 
 /// Space drops a crate above the marker; left/right (A/D) move the marker.

@@ -28,11 +28,23 @@ fn a_rope_dropped_on_the_ground_rests_on_it_and_reports_its_weight() {
         }
         let st = app.world().get::<CableState>(rope).unwrap().clone();
         let low = st.nodes.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
-        (st.contact_force, low)
+        (st.contact_force, low, st)
     };
     let weight = 1.6 * 10.0 * 9.81;
-    let (force, low) = run(true);
-    let (_, fallen) = run(false);
+    let (force, low, st) = run(true);
+    let (_, fallen, _) = run(false);
+    // The contacts one by one (what the gizmos draw): on the rope's
+    // centreline, pushing up, summing to the contact force; no friction at
+    // rest on flat ground.
+    let up: f32 = st.contacts.iter().map(|(_, f)| f.y).sum();
+    let sideways = st.contacts.iter().map(|(_, f)| f.x.hypot(f.z)).fold(0.0f32, f32::max);
+    assert!(!st.contacts.is_empty() && st.contacts.iter().all(|(p, f)| (p.y - 0.01).abs() < 1e-4 && f.y > 0.0), "{:?}", st.contacts);
+    assert!((up / force - 1.0).abs() < 1e-4 && sideways < 1e-3 * force, "contacts sum to {up} N up, {sideways} N sideways; contact force {force} N");
+    // One frame per element, its x along the element.
+    assert_eq!(st.frames.len(), 20);
+    for (frame, ends) in st.frames.iter().zip(st.nodes.windows(2)) {
+        assert!((*frame * Vec3::X).dot((ends[1] - ends[0]).normalize()) > 0.9999, "frame {frame:?} along {:?}", ends[1] - ends[0]);
+    }
     println!("contact force {force:.4} N vs {weight:.4} N; lowest node {low:.6} m; without contacts {fallen:.2} m");
     assert!((force as f64 / weight - 1.0).abs() < 1e-5, "contact force {force}");
     assert!((low - 0.01).abs() < 1e-5, "lowest node {low}");

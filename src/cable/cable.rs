@@ -944,6 +944,53 @@ impl RopeView<'_> {
         own.sum::<f64>() + other.sum::<f64>() + cables.sum::<f64>()
     }
 
+    /// Orientation (link frame to world) of each element's rigid segment,
+    /// from the user's start: its local x runs along the element in the
+    /// chain's direction (towards the user's start for a
+    /// [`reversed`](RopeView::reversed) rope), y and z are its bending axes.
+    pub fn element_frames(&self) -> Vec<DMat3> {
+        let ch = &self.cable.model.chain;
+        let mut out: Vec<DMat3> = (0..self.layout.elements).filter_map(|i| ch.link_rotation(self.layout.element_link(i))).collect();
+        if self.reversed {
+            out.reverse();
+        }
+        out
+    }
+
+    /// The contacts acting on this rope now, for drawing and inspection:
+    /// each as the point on the rope where it acts (world, m) and the force
+    /// it puts on the rope there (world, N: the normal force and the
+    /// friction together). The contacts of [`RopeView::contact_force`], and
+    /// also the rope's contacts with itself (both of their points). Order:
+    /// the contacts with colliders, then with the cable's own ropes, then
+    /// with other chains stepped with it (free bodies, other cables).
+    pub fn contacts(&self) -> Vec<(DVec3, DVec3)> {
+        let ch = &self.cable.model.chain;
+        let on_rope = |link: usize| (self.layout.dof(0, 0)..self.layout.dof(self.layout.elements, 0)).contains(&link);
+        let t = self.cable.state.t;
+        let mut out: Vec<(DVec3, DVec3)> = ch
+            .forces()
+            .iter()
+            .zip(ch.force_element_points())
+            .filter(|(f, at)| on_rope(f.link) && f.element.contact_force(t, at).is_some())
+            .map(|(f, at)| (at.point, f.element.wrench(t, &at).force))
+            .collect();
+        for (p, (a, b)) in ch.pairs().iter().zip(ch.pair_points()) {
+            if p.element.contact_force(t, &a, &b).is_none() {
+                continue;
+            }
+            let force = p.element.wrench(t, &a, &b).force;
+            if on_rope(p.link_a) {
+                out.push((a.point, force));
+            }
+            if on_rope(p.link_b) {
+                out.push((b.point, -force));
+            }
+        }
+        out.extend(ch.external_contact_forces().filter(|(l, _, _)| on_rope(*l)).map(|(_, p, f)| (p + ch.origin, f)));
+        out
+    }
+
     /// Axial tension (N) at arc length `s` (m, from the user's start): the
     /// force of the element joint nearest to `s`.
     pub fn tension_at(&self, s: f64) -> f64 {

@@ -449,6 +449,14 @@ pub struct CableState {
     /// (its weight, for a rope lying on the ground;
     /// [`CableDescriptor::contacts`]).
     pub contact_force: f32,
+    /// Orientation of each element's frame (world; its local x along the
+    /// element, y and z its bending axes), from the start
+    /// (`RopeView::element_frames`).
+    pub frames: Vec<Quat>,
+    /// The contacts on the rope: each point on the rope (world, m) and the
+    /// force the contact puts on it there (world, N: normal and friction;
+    /// `RopeView::contacts`, its contacts with itself included).
+    pub contacts: Vec<(Vec3, Vec3)>,
     /// Kinetic + gravitational + elastic energy of the cable's chain, J (for
     /// a [`CableRopeOf`] rope: of the whole chain it is solved in).
     pub energy: f64,

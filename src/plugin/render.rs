@@ -59,8 +59,9 @@
 //!   body was despawned) or its [`CableRender`] removed: the tube entity is
 //!   despawned and its mesh freed.
 //! * **Gizmos.** With Bevy's `GizmoPlugin` (in `DefaultPlugins`), the
-//!   [`CableGizmos`] config group draws the interpolated centreline and a
-//!   small sphere at every node. Off by default
+//!   [`CableGizmos`] config group draws the interpolated centreline, a
+//!   small sphere at every node, the contact points with an arrow of each
+//!   contact's force, and (as an option) each element's frame. Off by default
 //!   ([`CableRenderPlugin::with_gizmos`]); toggle it at run time through
 //!   `GizmoConfigStore`.
 //!
@@ -244,7 +245,8 @@ pub struct CableRenderSettings {
 }
 
 /// Gizmos of the cables: the centreline and the nodes, as drawn
-/// (interpolated). A Bevy `GizmoConfigGroup`: enable it with
+/// (interpolated), and the last fixed step's contacts (points and forces)
+/// and element frames. A Bevy `GizmoConfigGroup`: enable it with
 /// [`CableRenderPlugin::with_gizmos`] or at run time,
 /// `store.config_mut::<CableGizmos>().0.enabled = true` on
 /// `ResMut<GizmoConfigStore>`.
@@ -259,11 +261,35 @@ pub struct CableGizmos {
     pub node_radius: f32,
     /// Gizmo colour.
     pub color: Color,
+    /// Draw each element's frame ([`CableState::frames`], at the element's
+    /// middle as drawn): x (along the element) red, y green, z blue.
+    /// Default `false`.
+    pub frames: bool,
+    /// Length of a frame's axes, m.
+    pub frame_length: f32,
+    /// Draw the contacts ([`CableState::contacts`]): a sphere at each
+    /// contact point and an arrow of the force on the rope. Default `true`.
+    pub contacts: bool,
+    /// Arrow length per newton of contact force, m/N (default 1e-3: 1 kN
+    /// is drawn 1 m long).
+    pub force_scale: f32,
+    /// Colour of the contact gizmos.
+    pub contact_color: Color,
 }
 
 impl Default for CableGizmos {
     fn default() -> Self {
-        CableGizmos { centerline: true, nodes: true, node_radius: 0.03, color: Color::srgb(1.0, 0.85, 0.1) }
+        CableGizmos {
+            centerline: true,
+            nodes: true,
+            node_radius: 0.03,
+            color: Color::srgb(1.0, 0.85, 0.1),
+            frames: false,
+            frame_length: 0.1,
+            contacts: true,
+            force_scale: 1e-3,
+            contact_color: Color::srgb(1.0, 0.2, 0.8),
+        }
     }
 }
 
@@ -611,19 +637,38 @@ fn drop_tube(cable: Entity, commands: &mut Commands, tubes: &Query<&CableTube>) 
     }
 }
 
-/// The [`CableGizmos`]: centreline and nodes as drawn.
-fn draw_gizmos(mut gizmos: Gizmos<CableGizmos>, cables: Query<&CableRenderNodes>) {
+/// The [`CableGizmos`]: centreline and nodes as drawn; element frames and
+/// contacts of the last fixed step.
+fn draw_gizmos(mut gizmos: Gizmos<CableGizmos>, cables: Query<(&CableRenderNodes, Option<&CableState>)>) {
     if !gizmos.config.enabled {
         return;
     }
     let ext = gizmos.config_ext.clone();
-    for nodes in &cables {
+    for (nodes, state) in &cables {
         if ext.centerline {
             gizmos.linestrip(nodes.drawn.iter().copied(), ext.color);
         }
         if ext.nodes {
             for p in &nodes.drawn {
                 gizmos.sphere(Isometry3d::from_translation(*p), ext.node_radius, ext.color);
+            }
+        }
+        let Some(state) = state else {
+            continue;
+        };
+        if ext.frames {
+            let axes = [(Vec3::X, Color::srgb(0.9, 0.1, 0.1)), (Vec3::Y, Color::srgb(0.1, 0.8, 0.1)), (Vec3::Z, Color::srgb(0.1, 0.3, 0.95))];
+            for (frame, ends) in state.frames.iter().zip(nodes.drawn.windows(2)) {
+                let middle = 0.5 * (ends[0] + ends[1]);
+                for (axis, color) in axes {
+                    gizmos.line(middle, middle + *frame * axis * ext.frame_length, color);
+                }
+            }
+        }
+        if ext.contacts {
+            for &(point, force) in &state.contacts {
+                gizmos.sphere(Isometry3d::from_translation(point), 0.5 * ext.node_radius, ext.contact_color);
+                gizmos.arrow(point, point + force * ext.force_scale, ext.contact_color);
             }
         }
     }

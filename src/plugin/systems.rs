@@ -485,6 +485,8 @@ pub(crate) fn readout(mut cables: Query<(&CableSim, &mut CableState)>, mut ropes
         st.tensions = (0..r.elements()).map(|i| r.element_forces(i).map_or(0.0, |f| f.tension as f32)).collect();
         st.stretched_length = r.stretched_length() as f32;
         st.contact_force = r.contact_force() as f32;
+        st.frames = r.element_frames().iter().map(|m| Quat::from_mat3(&m.as_mat3()).normalize()).collect();
+        st.contacts = r.contacts().iter().map(|(p, f)| (p.as_vec3(), f.as_vec3())).collect();
         st.energy = c.energy();
         st.time = c.time();
         st.newton_iterations = c.last_stats.newton_iterations;

@@ -443,6 +443,13 @@ impl Chain {
         self.external.iter().filter_map(|e| e.contact.map(|f| (e.link, f)))
     }
 
+    /// The contacts with other chains that the last [`Forest`] evaluation
+    /// put on this chain: each link, point (relative to the chain's origin,
+    /// m) and force on this chain (world, N).
+    pub fn external_contact_forces(&self) -> impl Iterator<Item = (usize, DVec3, DVec3)> + '_ {
+        self.external.iter().filter(|e| e.contact.is_some()).map(|e| (e.link, e.p, e.wrench.force))
+    }
+
     /// Drops the halves of pair elements with other chains that the last
     /// [`Forest`] left on this chain.
     pub fn clear_external(&mut self) {
