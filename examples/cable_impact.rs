@@ -14,7 +14,7 @@
 //!   W/S: release angle ±5° (20°–70°, taken at the next release);
 //! * mouse drag: orbit the camera; mouse wheel: zoom;
 //! * R: reset (both ropes and the hook respawned); T: tension colours
-//!   on/off; G: node gizmos on/off.
+//!   on/off; G: gizmos on/off (nodes, contacts).
 //!
 //! The HUD shows the contact force between the ropes, the pendant's top
 //! tension and the hook's speed. The step is slower than real time while

@@ -9,7 +9,7 @@
 //! * arrow keys / WASD: push the crate (a 2 kN `ExternalImpulse` every
 //!   fixed step, along the camera's view on the ground); space: a big kick
 //!   (3 m/s); R: reset (despawn and respawn the crate and its rope);
-//! * T: tension colours on/off; G: node gizmos on/off.
+//! * T: tension colours on/off; G: gizmos on/off (nodes, contacts).
 //!
 //! Options:
 //! * `--headless N`: no window and no renderer (`MinimalPlugins`): runs

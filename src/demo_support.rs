@@ -136,7 +136,7 @@ where
 type GizmoStore<'w> = Option<ResMut<'w, GizmoConfigStore>>;
 
 /// A system: T switches the ropes' tension colours (red at `red_at` N)
-/// on and off, G the node gizmos ([`CableGizmos`]).
+/// on and off, G the gizmos ([`CableGizmos`]: nodes, contacts).
 /// (Without Bevy's gizmos, G does nothing.)
 pub fn look_keys(red_at: f32) -> impl FnMut(Res<ButtonInput<KeyCode>>, Query<&mut CableRender>, GizmoStore) {
     move |keys: Res<ButtonInput<KeyCode>>, mut looks: Query<&mut CableRender>, gizmos: GizmoStore| {

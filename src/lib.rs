@@ -33,7 +33,7 @@
 //! | `sim` | `scenario` + `rapier` + `sim` | — |
 //! | `app` | `rapier` + `plugin` (and `plugin::scenario` with `sim`) | bevy, bevy_rapier3d, log |
 //! | `cli` | `app` + `sim` + `output` and the `cablesim` binary | clap, indicatif, csv, serde_json, plotters |
-//! | `render` | `app` + `plugin::render`: ropes drawn as lit tube meshes interpolated between fixed steps, node gizmos (an app with its own window and renderer) | Bevy's `bevy_asset`, `bevy_mesh`, `bevy_pbr`, `bevy_gizmos` (and the render crates they need) |
+//! | `render` | `app` + `plugin::render`: ropes drawn as lit tube meshes interpolated between fixed steps, gizmos for nodes, contacts and element frames (an app with its own window and renderer) | Bevy's `bevy_asset`, `bevy_mesh`, `bevy_pbr`, `bevy_gizmos` (and the render crates they need) |
 //! | `demo` | `render` + a windowed Bevy for the examples (`hanging_payload`): winit on X11 only (no Wayland, audio or gamepads, so no system dev packages are needed to build), 3D and UI rendering, PNG screenshots | Bevy's `default_app`, `bevy_winit`, `x11`, `3d_bevy_render`, `ui_api`, ... |
 //!
 //! The default features are `app` and `cli`, so that `cargo run --release --

@@ -8,7 +8,7 @@
 //! Keys: mouse drag or arrow keys orbit, the wheel or PageUp / PageDown
 //! zoom; Space pauses, N (or `.`) steps one frame (`dt`) while paused, R
 //! reloads the file and starts again, `+` / `-` double / halve the time
-//! scale, G shows the node gizmos, T colours the ropes by tension. The HUD
+//! scale, G shows the gizmos (nodes, contacts), T colours the ropes by tension. The HUD
 //! shows the simulated time, the real-time factor, the largest tension
 //! of any rope element and the probes of the file (the columns of
 //! `results.csv`, last row). At the end of the scenario's `duration` the

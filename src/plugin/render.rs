@@ -1,5 +1,6 @@
 //! Drawing cables (feature `render`): every rope as a smooth lit tube mesh,
-//! its nodes interpolated between fixed steps, and optional node gizmos.
+//! its nodes interpolated between fixed steps, and optional gizmos (nodes,
+//! contacts with their forces, element frames).
 //!
 //! ```no_run
 //! use bevy::prelude::*;
