@@ -39,6 +39,7 @@ fn a_rope_dropped_on_the_ground_rests_on_it_and_reports_its_weight() {
     let up: f32 = st.contacts.iter().map(|(_, f)| f.y).sum();
     let sideways = st.contacts.iter().map(|(_, f)| f.x.hypot(f.z)).fold(0.0f32, f32::max);
     assert!(!st.contacts.is_empty() && st.contacts.iter().all(|(p, f)| (p.y - 0.01).abs() < 1e-4 && f.y > 0.0), "{:?}", st.contacts);
+    println!("{} contacts sum to {up} N up (off by {:.1e}), at most {sideways} N sideways", st.contacts.len(), up / force - 1.0);
     assert!((up / force - 1.0).abs() < 1e-4 && sideways < 1e-3 * force, "contacts sum to {up} N up, {sideways} N sideways; contact force {force} N");
     // One frame per element, its x along the element.
     assert_eq!(st.frames.len(), 20);
