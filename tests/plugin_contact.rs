@@ -184,3 +184,47 @@ fn crates_dropped_on_a_rope_bridge_stack_and_come_to_rest_on_it() {
         assert!(settled < 0.3, "every {every} s: a crate still moves at {settled} m/s");
     }
 }
+
+/// A 20 kg box resting on the ground, and a free 3 m steel rope (damped,
+/// 0.05 s) let go 5 mm above its top: the box is a free body of the rope's
+/// step while the rope touches it, and rapier's ground holds it. Over 4 s
+/// at 1/60 s its centre stays its half height (0.1 m) above the ground to
+/// 1 mm. (With the island's pose handed to a box that touches the ground,
+/// 2026-11-27, it sank 5 cm into it: the island does not hold the ground.)
+/// Not checked here, and open: the rope is thrown up to 2 m off the box in
+/// its first second (the island moves the box down under gravity over the
+/// step, rapier's ground does not, and the rope starts the next step inside
+/// the box), then lands on the ground; docs/architecture.md "Free bodies on
+/// ropes".
+#[test]
+fn a_box_on_the_ground_under_a_rope_stays_on_the_ground() {
+    let mut app = plugin_app::headless_app(1.0 / 60.0);
+    let w = app.world_mut();
+    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(20.0, 0.5, 20.0)));
+    let block = w
+        .spawn((RigidBody::Dynamic, Collider::cuboid(0.4, 0.1, 0.4), ColliderMassProperties::Mass(20.0), Velocity::zero(), Transform::from_xyz(0.0, 0.1, 0.0)))
+        .id();
+    w.spawn(
+        CableDescriptor::new(3.0)
+            .material(RopeMaterial::steel_6x36_iwrc(0.02))
+            .segments(30)
+            .damping(0.05)
+            .start(CableAnchor::Free)
+            .path([Vec3::new(-1.5, 0.215, 0.0), Vec3::new(1.5, 0.215, 0.0)]),
+    );
+    let (mut low, mut high, mut errors) = (f32::INFINITY, f32::NEG_INFINITY, Vec::new());
+    for step in 0..240 {
+        app.update();
+        errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()));
+        let y = app.world().get::<Transform>(block).unwrap().translation.y;
+        // (Once the rope has come down, from 2.5 s; before, it falls on the
+        // box and can lift it: the open rope launch above.)
+        if step >= 150 {
+            (low, high) = (low.min(y), high.max(y));
+        }
+        low = low.min(y);
+    }
+    println!("box centre {low:.5} … {high:.5} m; errors {errors:?}");
+    assert!(errors.is_empty(), "{errors:?}");
+    assert!(low > 0.099 && high < 0.101, "the box should stay on the ground: centre {low} … {high} m");
+}

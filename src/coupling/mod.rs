@@ -1773,16 +1773,33 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
 /// explicit gyroscopic term turns a spinning box's angular velocity away
 /// from the island's exact one, and a box that kept rapier's pose for that
 /// met the ropes out of place at the next step (crates on a rope bridge
-/// thrown up at 3 m/s). A body rapier did move (or damped) keeps rapier's
-/// pose and velocities.
+/// thrown up at 3 m/s). A body that rapier's contacts with other dynamic
+/// bodies alone touched (a crate landing on it) is put on the island's
+/// pose with rapier's velocities: rapier had pushed a crate lying on ropes
+/// into them. One that touches a fixed or kinematic collider (the ground),
+/// or that rapier damped, keeps rapier's pose and velocities: the island
+/// does not hold those contacts, and on its pose a box on the ground under
+/// a rope sank 5 cm into it.
 fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
+    let Some(own) = bodies.get(end.handle).map(|rb| rb.colliders().to_vec()) else {
+        return;
+    };
+    // Rapier's active contacts on the body: with dynamic bodies, and with
+    // anything else (fixed or kinematic bodies, colliders without a body).
+    let (mut touched, mut held) = (false, false);
+    for h in own.iter().filter(|h| colliders.get(**h).is_some()) {
+        for pair in narrow_phase.contact_pairs_with(*h).filter(|p| p.has_any_active_contact()) {
+            let other = if pair.collider1 == *h { pair.collider2 } else { pair.collider1 };
+            let dynamic = colliders.get(other).and_then(|c| c.parent()).and_then(|b| bodies.get(b)).is_some_and(|b| b.is_dynamic());
+            touched |= dynamic;
+            held |= !dynamic;
+        }
+    }
     let Some(rb) = bodies.get_mut(end.handle) else {
         return;
     };
     let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-5 * (1.0 + b.length());
-    let touched =
-        rb.colliders().iter().filter(|h| colliders.get(**h).is_some()).any(|h| narrow_phase.contact_pairs_with(*h).any(|p| p.has_any_active_contact()));
-    if rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0 || !(touched || close(rb.linvel().as_dvec3(), end.velocity)) {
+    if held || rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0 || !(touched || close(rb.linvel().as_dvec3(), end.velocity)) {
         return;
     }
     rb.set_position(rp::Pose::from_parts(end.origin.as_vec3(), DQuat::from_mat3(&end.rotation).normalize().as_quat()), false);
