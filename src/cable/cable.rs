@@ -915,6 +915,11 @@ impl RopeView<'_> {
         m.element_forces_in(l, k, q, v)
     }
 
+    /// The chain's sub-joints (links) of this rope.
+    fn links(&self) -> std::ops::Range<usize> {
+        self.layout.dof(0, 0)..self.layout.dof(self.layout.elements, 0)
+    }
+
     /// The sum of the normal forces of the contacts on this rope
     /// ([`ForceElement::contact_force`]: the [`SphereContact`](super::SphereContact)s
     /// among its force elements, and the [`PairContact`](super::PairContact)s
@@ -923,24 +928,19 @@ impl RopeView<'_> {
     /// internal and not counted.
     pub fn contact_force(&self) -> f64 {
         let ch = &self.cable.model.chain;
-        let (first, last) = (self.layout.dof(0, 0), self.layout.dof(self.layout.elements, 0));
+        let on_rope = |link: &usize| self.links().contains(link);
         let t = self.cable.state.t;
-        let own = ch
-            .forces()
-            .iter()
-            .zip(ch.force_element_points())
-            .filter(|(f, _)| (first..last).contains(&f.link))
-            .filter_map(|(f, at)| f.element.contact_force(t, &at));
+        let own = ch.forces().iter().zip(ch.force_element_points()).filter(|(f, _)| on_rope(&f.link)).filter_map(|(f, at)| f.element.contact_force(t, &at));
         // Contacts with another rope of the cable count; a rope's contacts
         // with itself are internal and do not.
         let other = ch
             .pairs()
             .iter()
             .zip(ch.pair_points())
-            .filter(|(p, _)| (first..last).contains(&p.link_a) != (first..last).contains(&p.link_b))
+            .filter(|(p, _)| on_rope(&p.link_a) != on_rope(&p.link_b))
             .filter_map(|(p, (a, b))| p.element.contact_force(t, &a, &b));
         // Contacts with another cable's ropes (a joint step's).
-        let cables = ch.external_contacts().filter(|(l, _)| (first..last).contains(l)).map(|(_, f)| f);
+        let cables = ch.external_contacts().filter(|(l, _)| on_rope(l)).map(|(_, f)| f);
         own.sum::<f64>() + other.sum::<f64>() + cables.sum::<f64>()
     }
 
@@ -966,7 +966,7 @@ impl RopeView<'_> {
     /// with other chains stepped with it (free bodies, other cables).
     pub fn contacts(&self) -> Vec<(DVec3, DVec3)> {
         let ch = &self.cable.model.chain;
-        let on_rope = |link: usize| (self.layout.dof(0, 0)..self.layout.dof(self.layout.elements, 0)).contains(&link);
+        let on_rope = |link: usize| self.links().contains(&link);
         let t = self.cable.state.t;
         let mut out: Vec<(DVec3, DVec3)> = ch
             .forces()

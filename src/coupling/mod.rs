@@ -1732,16 +1732,8 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
             // solve when its carried bodies' contacts are
             // (`add_body_contacts`): only the others (dynamic bodies) count
             // then.
-            let handled = |other: rp::ColliderHandle| {
-                cc.body_contacts && colliders.get(other).and_then(|co| co.parent()).and_then(|b| bodies.get(b)).is_some_and(|b| !b.is_dynamic())
-            };
-            let touched = bodies.get(cc.carried[k].body).is_some_and(|rb| {
-                rb.colliders().iter().any(|h| {
-                    narrow_phase
-                        .contact_pairs_with(*h)
-                        .any(|p| p.has_any_active_contact() && !handled(if p.collider1 == *h { p.collider2 } else { p.collider1 }))
-                })
-            });
+            let handled = |other: rp::ColliderHandle| cc.body_contacts && owner_is_dynamic(other, bodies, colliders) == Some(false);
+            let touched = bodies.get(cc.carried[k].body).is_some_and(|rb| rapier_touches(rb, narrow_phase, |other| !handled(other)));
             let c = &mut cc.carried[k];
             let Some(rb) = bodies.get_mut(c.body) else {
                 continue;
@@ -1757,6 +1749,20 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
             c.mark = Some((rb.linvel(), rb.angvel()));
         }
     }
+}
+
+/// Whether the body owning collider `other` is dynamic (`None`: no such
+/// collider, or one without a body).
+fn owner_is_dynamic(other: rp::ColliderHandle, bodies: &rp::RigidBodySet, colliders: &rp::ColliderSet) -> Option<bool> {
+    colliders.get(other).and_then(|c| c.parent()).and_then(|b| bodies.get(b)).map(|b| b.is_dynamic())
+}
+
+/// Whether one of rapier's active contacts on `rb`'s colliders is with a
+/// collider `counts` accepts.
+fn rapier_touches(rb: &rp::RigidBody, narrow_phase: &rp::NarrowPhase, counts: impl Fn(rp::ColliderHandle) -> bool) -> bool {
+    rb.colliders()
+        .iter()
+        .any(|h| narrow_phase.contact_pairs_with(*h).any(|p| p.has_any_active_contact() && counts(if p.collider1 == *h { p.collider2 } else { p.collider1 })))
 }
 
 /// A free body the ropes of an island touched, after rapier's step: if
@@ -1781,20 +1787,13 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
 /// does not hold those contacts, and on its pose a box on the ground under
 /// a rope sank 5 cm into it.
 fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
-    let Some(own) = bodies.get(end.handle).map(|rb| rb.colliders().to_vec()) else {
+    let Some(rb) = bodies.get(end.handle) else {
         return;
     };
     // Rapier's active contacts on the body: with dynamic bodies, and with
     // anything else (fixed or kinematic bodies, colliders without a body).
-    let (mut touched, mut held) = (false, false);
-    for h in own.iter().filter(|h| colliders.get(**h).is_some()) {
-        for pair in narrow_phase.contact_pairs_with(*h).filter(|p| p.has_any_active_contact()) {
-            let other = if pair.collider1 == *h { pair.collider2 } else { pair.collider1 };
-            let dynamic = colliders.get(other).and_then(|c| c.parent()).and_then(|b| bodies.get(b)).is_some_and(|b| b.is_dynamic());
-            touched |= dynamic;
-            held |= !dynamic;
-        }
-    }
+    let dynamic = |other| owner_is_dynamic(other, bodies, colliders) == Some(true);
+    let (touched, held) = (rapier_touches(rb, narrow_phase, dynamic), rapier_touches(rb, narrow_phase, |other| !dynamic(other)));
     let Some(rb) = bodies.get_mut(end.handle) else {
         return;
     };
