@@ -226,9 +226,9 @@ impl FrictionMemory {
     /// the same fraction along its element), else the contact point now
     /// and no friction this step, and the link's orientation now as its
     /// frame.
-    pub(crate) fn attach(&mut self, cable: &mut Cable, fixed: usize) {
-        let points: Vec<PointState> = cable.model.chain.force_element_points().skip(fixed).collect();
-        let forces = cable.model.chain.forces_mut();
+    pub(crate) fn attach(&mut self, chain: &mut Chain, fixed: usize) {
+        let points: Vec<PointState> = chain.force_element_points().skip(fixed).collect();
+        let forces = chain.forces_mut();
         for (k, ((site, contact, fraction, mu), at)) in self.step.iter_mut().zip(points).enumerate() {
             if *mu <= 0.0 {
                 continue;
@@ -644,14 +644,52 @@ pub(crate) fn add_body_contacts(
         let Some(rb) = bodies.get(c.body) else {
             continue;
         };
-        let Ok(law) = body_law(c.mass) else {
-            continue;
+        let touch =
+            BodyTouch { body: c.body, mass: c.mass, state: cable.model.body_state(&c.place), link: c.place.link, place: (c.place.origin, c.place.rotation) };
+        approach = approach.max(touch.add(rb, world.colliders, &obstacles, memory, gravity, h, &mut hits));
+    }
+    let any = !hits.is_empty();
+    cable.model.chain.forces_mut().extend(hits);
+    (any, approach)
+}
+
+/// A rigid body in a chain, for its contacts with fixed and kinematic
+/// colliders: the rapier body, its mass (kg), its frame's pose and
+/// velocity in the chain (origin (m), rotation, origin velocity (m/s),
+/// angular velocity (rad/s)), and the link that carries it with the
+/// body frame's pose in that link's frame.
+struct BodyTouch {
+    body: rp::RigidBodyHandle,
+    mass: f64,
+    state: (DVec3, DMat3, DVec3, DVec3),
+    link: usize,
+    place: (DVec3, DMat3),
+}
+
+impl BodyTouch {
+    /// Pushes onto `hits` a [`SphereContact`] for each touch point
+    /// ([`touch_points`]) of each of `rb`'s non-sensor colliders within
+    /// the speculative reach (over `h` s, under `gravity` m/s²) of one of
+    /// `obstacles`, noted in `memory` for its friction. Returns how fast
+    /// they may close (m/s).
+    #[allow(clippy::too_many_arguments)]
+    fn add(
+        &self,
+        rb: &rp::RigidBody,
+        colliders: &rp::ColliderSet,
+        obstacles: &[Obstacle<'_>],
+        memory: &mut FrictionMemory,
+        gravity: f64,
+        h: f64,
+        hits: &mut Vec<AttachedForce>,
+    ) -> f64 {
+        let mut approach = 0.0f64;
+        let Ok(law) = body_law(self.mass) else {
+            return approach;
         };
-        // The body's pose and velocity in the chain (its origin, rotation,
-        // origin velocity, angular velocity).
-        let (p, r, v, w) = cable.model.body_state(&c.place);
+        let (p, r, v, w) = self.state;
         for own in rb.colliders() {
-            let Some(collider) = world.colliders.get(*own) else {
+            let Some(collider) = colliders.get(*own) else {
                 continue;
             };
             if collider.is_sensor() {
@@ -659,7 +697,7 @@ pub(crate) fn add_body_contacts(
             }
             let (lt, lr) = offset(collider);
             let points: Vec<(DVec3, f64)> = touch_points(collider.shape()).into_iter().map(|(q, radius)| (lt + lr * q, radius)).collect();
-            for obstacle in &obstacles {
+            for obstacle in obstacles {
                 let (cmin, cmax) = obstacle.aabb();
                 let co = obstacle.collider;
                 let mu = combine(collider.friction() as f64, co.friction() as f64, collider.friction_combine_rule(), co.friction_combine_rule());
@@ -681,15 +719,115 @@ pub(crate) fn add_body_contacts(
                         continue;
                     }
                     let site = Site::Body { collider: *own, point, obstacle: obstacle.handle };
-                    let element = memory.note(site, obstacle.contact(hit, *radius, law), mu, 0.0, [co.parent(), Some(c.body)]);
-                    hits.push(AttachedForce { link: c.place.link, local_point: c.place.origin + c.place.rotation * *q, element: Arc::new(element) });
+                    let element = memory.note(site, obstacle.contact(hit, *radius, law), mu, 0.0, [co.parent(), Some(self.body)]);
+                    hits.push(AttachedForce { link: self.link, local_point: self.place.0 + self.place.1 * *q, element: Arc::new(element) });
                 }
             }
         }
+        approach
     }
-    let any = !hits.is_empty();
-    cable.model.chain.forces_mut().extend(hits);
-    (any, approach)
+}
+
+/// Whether the contacts of `rb` with fixed and kinematic colliders can be
+/// solved with it ([`add_free_body_contacts`]): every non-sensor collider
+/// of it has touch points ([`touch_points`]).
+pub(crate) fn touches_are_solved(rb: &rp::RigidBody, colliders: &rp::ColliderSet) -> bool {
+    rb.colliders().iter().filter_map(|c| colliders.get(*c)).filter(|c| !c.is_sensor()).all(|c| !touch_points(c.shape()).is_empty())
+}
+
+/// Where a free body of an island (the rapier body `handle` with its
+/// frame at `origin`, turned by `rotation`) starts its step: moved out of
+/// the fixed and kinematic colliders it sinks into, along the deepest
+/// touch point's normal, a few times over. Rapier's resting contact lets
+/// a box on the ground sink about 70 µm (its allowed error); the island's
+/// steel contact law, met at that depth, threw a 20 kg box 6 mm up when it
+/// joined a rope's step (a rope let go on it). Moving the body out adds
+/// no velocity.
+pub(crate) fn out_of_obstacles(
+    handle: rp::RigidBodyHandle,
+    (origin, rotation): (DVec3, DMat3),
+    world: &Contacts<'_>,
+    bodies: &rp::RigidBodySet,
+    now: f64,
+) -> DVec3 {
+    let Some(rb) = bodies.get(handle) else {
+        return origin;
+    };
+    let obstacles = Obstacle::all(world, bodies, &[handle], now, now);
+    let points: Vec<(DVec3, f64)> = rb
+        .colliders()
+        .iter()
+        .filter_map(|c| world.colliders.get(*c))
+        .filter(|c| !c.is_sensor())
+        .flat_map(|c| {
+            let (lt, lr) = offset(c);
+            touch_points(c.shape()).into_iter().map(move |(q, radius)| (lt + lr * q, radius))
+        })
+        .collect();
+    let mut origin = origin;
+    for _ in 0..4 {
+        let mut deepest: Option<(f64, DVec3)> = None;
+        for obstacle in &obstacles {
+            let (cmin, cmax) = obstacle.aabb();
+            for (q, radius) in &points {
+                let p = origin + rotation * *q;
+                if (p - *radius).cmpgt(cmax).any() || (p + *radius).cmplt(cmin).any() {
+                    continue;
+                }
+                if let Some(hit) = obstacle.nearest(p) {
+                    let depth = radius - hit.2;
+                    if depth > deepest.map_or(0.0, |d| d.0) {
+                        deepest = Some((depth, obstacle.rotation * hit.1));
+                    }
+                }
+            }
+        }
+        match deepest {
+            Some((depth, normal)) => origin += normal * depth,
+            None => break,
+        }
+    }
+    origin
+}
+
+/// Adds this pass's contacts of a free body of an island (the rapier body
+/// `handle`, as the chain `body`) against the fixed and kinematic
+/// colliders, as [`add_body_contacts`] does for a carried body: a box on
+/// the ground that a rope lands on rests on the ground inside the
+/// island's solve. Its friction anchors are `memory`'s (`memory` takes
+/// this pass's contacts; [`FrictionMemory::remember`] after the pass).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn add_free_body_contacts(
+    body: &mut crate::cable::FreeBody,
+    handle: rp::RigidBodyHandle,
+    memory: &mut FrictionMemory,
+    world: &Contacts<'_>,
+    bodies: &rp::RigidBodySet,
+    h: f64,
+    now: f64,
+    start: f64,
+) {
+    let Some(rb) = bodies.get(handle) else {
+        return;
+    };
+    memory.discard_step();
+    let (origin, rotation) = body.pose();
+    let (velocity, angular_velocity) = body.velocity();
+    let frame_velocity = velocity - angular_velocity.cross(rotation * body.com);
+    let touch = BodyTouch {
+        body: handle,
+        mass: body.mass,
+        state: (origin, rotation, frame_velocity, angular_velocity),
+        link: crate::cable::FreeBody::LINK,
+        place: (DVec3::ZERO, DMat3::IDENTITY),
+    };
+    let obstacles = Obstacle::all(world, bodies, &[handle], now, start);
+    let mut hits = Vec::new();
+    touch.add(rb, world.colliders, &obstacles, memory, body.chain.gravity.length(), h, &mut hits);
+    let chain = &mut body.chain;
+    let fixed = chain.forces_mut().len();
+    chain.forces_mut().extend(hits);
+    memory.attach(chain, fixed);
 }
 
 /// Drops the force elements past `keep` and the pair elements past

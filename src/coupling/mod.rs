@@ -376,6 +376,10 @@ pub struct CoupledCable {
     /// Where the island's solve left each free body at the end of the last
     /// step (on the island's first cable), for [`after_rapier`].
     free_ends: Vec<BodyPass>,
+    /// The friction anchors of the island's free bodies on fixed and
+    /// kinematic colliders, from step to step (on the island's first
+    /// cable).
+    free_friction: Vec<(rp::RigidBodyHandle, contact::FrictionMemory)>,
     /// Stopped after a failed step.
     pub failed: bool,
     /// The failure of this step's advance (time of the failing sub-step),
@@ -1017,6 +1021,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         failed: false,
         free_forces: Vec::new(),
         free_ends: Vec::new(),
+        free_friction: Vec::new(),
         advance_failure: None,
     })
 }
@@ -1184,7 +1189,7 @@ pub fn step_cables(
                 let ropes = ropes.max(contact::add_self_contacts(&mut cc.cable, &settings, &mut cc.friction, h));
                 let (any, carried) = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, &own, h, start);
                 cc.body_contacts = any;
-                cc.friction.attach(&mut cc.cable, cc.fixed_forces);
+                cc.friction.attach(&mut cc.cable.model.chain, cc.fixed_forces);
                 count = contact_passes(ropes.max(carried), h);
             }
         }
@@ -1193,7 +1198,7 @@ pub fn step_cables(
     }
     // Ropes of different cables that touch: such cables form an island,
     // stepped as one system (`advance_island`).
-    let free = free_bodies(cables, bodies, &owns, contacts.colliders);
+    let free = free_bodies(cables, bodies, &owns, contacts.colliders, joints);
     let islands = cable_islands(cables, &free, bodies, contacts.colliders, h);
     let mut alone = vec![true; cables.len()];
     for island in &islands {
@@ -1202,6 +1207,7 @@ pub fn step_cables(
     // A cable touching no other and no free body keeps no such touches.
     for (cc, _) in cables.iter_mut().zip(&alone).filter(|(_, a)| **a) {
         cc.friction.cross_pairs.clear();
+        cc.free_friction.clear();
     }
     // The other cables' own solves: independent of each other and of
     // rapier (every body a cable reads was sampled or handed over above),
@@ -1320,7 +1326,7 @@ fn find_contacts(
     contact::add_contacts(&mut cc.cable, settings, &mut cc.friction, contacts, bodies, own, hp, start);
     contact::add_self_contacts(&mut cc.cable, settings, &mut cc.friction, hp);
     cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, contacts, bodies, own, hp, start).0;
-    cc.friction.attach(&mut cc.cable, cc.fixed_forces);
+    cc.friction.attach(&mut cc.cable.model.chain, cc.fixed_forces);
 }
 
 /// Cables whose ropes touch each other at a step's start (within the
@@ -1329,19 +1335,25 @@ fn find_contacts(
 /// the passes their closing speed asks for.
 struct Island {
     members: Vec<usize>,
-    bodies: Vec<rp::RigidBodyHandle>,
+    /// Each body, and whether the island solves its contacts with fixed
+    /// and kinematic colliders ([`free_bodies`]).
+    bodies: Vec<(rp::RigidBodyHandle, bool)>,
     passes: u32,
 }
 
 /// The dynamic rapier bodies no cable holds (not a cable's end, carried
 /// body, follower or rail), with colliders, that may touch a rope: each
-/// with a bound on its surface's speed (m/s).
+/// with a bound on its surface's speed (m/s), and whether an island
+/// solves its contacts with fixed and kinematic colliders too (no joint
+/// holds it, and all its colliders have touch points:
+/// [`contact::touches_are_solved`]).
 fn free_bodies(
     cables: &[&mut CoupledCable],
     bodies: &rp::RigidBodySet,
     owns: &[Vec<rp::RigidBodyHandle>],
     colliders: &rp::ColliderSet,
-) -> Vec<(rp::RigidBodyHandle, f64)> {
+    joints: &rp::ImpulseJointSet,
+) -> Vec<(rp::RigidBodyHandle, f64, bool)> {
     if cables.iter().all(|c| c.failed || c.contact.is_none()) {
         return Vec::new();
     }
@@ -1353,14 +1365,17 @@ fn free_bodies(
         .chain(cables.iter().flat_map(|c| c.carried.iter().map(|k| k.body)))
         .chain(cables.iter().flat_map(|c| c.followers.iter().map(|f| f.body)))
         .collect();
-    let mut free: Vec<(rp::RigidBodyHandle, f64)> = bodies
+    let mut free: Vec<(rp::RigidBodyHandle, f64, bool)> = bodies
         .iter()
         .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h))
         .filter(|(_, rb)| rb.colliders().iter().any(|c| colliders.get(*c).is_some_and(|c| !c.is_sensor())))
-        .map(|(h, rb)| (h, rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * contact::body_extent(rb, colliders)))
+        .map(|(h, rb)| {
+            let speed = rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * contact::body_extent(rb, colliders);
+            (h, speed, joints.attached_joints(h).next().is_none() && contact::touches_are_solved(rb, colliders))
+        })
         .collect();
     // (Rapier's arena order: the same on every run.)
-    free.sort_by_key(|(h, _)| h.into_raw_parts());
+    free.sort_by_key(|(h, _, _)| h.into_raw_parts());
     free
 }
 
@@ -1371,7 +1386,7 @@ fn free_bodies(
 /// not listed.
 fn cable_islands(
     cables: &[&mut CoupledCable],
-    free: &[(rp::RigidBodyHandle, f64)],
+    free: &[(rp::RigidBodyHandle, f64, bool)],
     bodies: &rp::RigidBodySet,
     colliders: &rp::ColliderSet,
     h: f64,
@@ -1400,7 +1415,7 @@ fn cable_islands(
         join(&mut root, p.cable_a, p.cable_b);
     }
     approach.resize(nodes, 0.0);
-    for (k, &(handle, speed)) in free.iter().enumerate() {
+    for (k, &(handle, speed, _)) in free.iter().enumerate() {
         let Some(rb) = bodies.get(handle) else {
             continue;
         };
@@ -1434,7 +1449,8 @@ fn cable_islands(
         if k < candidates.len() {
             island.members.push(candidates[k]);
         } else {
-            island.bodies.push(free[k - candidates.len()].0);
+            let (handle, _, solved) = free[k - candidates.len()];
+            island.bodies.push((handle, solved));
         }
         island.passes = island.passes.max(contact_passes(approach[k], h));
     }
@@ -1442,10 +1458,12 @@ fn cable_islands(
 }
 
 /// A free body of an island between passes: its frame's pose and its
-/// centre of mass's and angular velocities (world).
+/// centre of mass's and angular velocities (world), and whether the
+/// island solves its contacts with fixed and kinematic colliders.
 #[derive(Debug, Clone, Copy)]
 struct BodyPass {
     handle: rp::RigidBodyHandle,
+    grounded: bool,
     origin: DVec3,
     rotation: DMat3,
     velocity: DVec3,
@@ -1494,15 +1512,42 @@ fn advance_island(
             }
         }
     }
-    let starts: Vec<BodyPass> = island
+    // The free bodies' friction anchors on the ground, kept by whichever
+    // member had them (the island's first cable keeps them after the
+    // step): `None` for a body new to the island.
+    let kept: Vec<Option<contact::FrictionMemory>> = island
         .bodies
         .iter()
-        .filter_map(|&handle| {
-            let rb = bodies.get(handle)?;
-            let (origin, rotation) = pose_of(rb);
-            Some(BodyPass { handle, origin, rotation, velocity: rb.linvel().as_dvec3(), angular_velocity: rb.angvel().as_dvec3() })
+        .map(|&(handle, _)| {
+            members.iter().find_map(|&i| {
+                let kept = &mut cables[i].free_friction;
+                kept.iter().position(|(h, _)| *h == handle).map(|k| kept.swap_remove(k).1)
+            })
         })
         .collect();
+    let mut memories: Vec<contact::FrictionMemory> = Vec::with_capacity(kept.len());
+    let mut starts: Vec<BodyPass> = Vec::with_capacity(kept.len());
+    for (&(handle, grounded), memory) in island.bodies.iter().zip(kept) {
+        let Some(rb) = bodies.get(handle) else {
+            continue;
+        };
+        let (mut origin, rotation) = pose_of(rb);
+        // A body new to the island comes from rapier's resting contacts,
+        // sunk into the ground by rapier's allowed error: moved out of it.
+        // (One that goes on comes from the island's pose, whose contact
+        // preload the move would take away: a box sliding down a slope
+        // under a rope then started every step with no normal force and
+        // no friction, and slid 7 % faster than Coulomb's rate.)
+        if grounded && memory.is_none() {
+            origin = contact::out_of_obstacles(handle, (origin, rotation), contacts, bodies, start);
+        }
+        starts.push(BodyPass { handle, grounded, origin, rotation, velocity: rb.linvel().as_dvec3(), angular_velocity: rb.angvel().as_dvec3() });
+        memories.push(memory.unwrap_or_default());
+    }
+    // (Those of bodies no longer in the island are dropped.)
+    for &i in members {
+        cables[i].free_friction.clear();
+    }
     // What a retry goes back to.
     let saved: Vec<(State, Chain, u64, StepStats, contact::FrictionMemory)> = members
         .iter()
@@ -1514,8 +1559,10 @@ fn advance_island(
     let mut count = count.max(1);
     loop {
         let mut ends = starts.clone();
-        match island_passes(cables, members, &mut ends, owns, contacts, bodies, inputs, h, count, n) {
+        let mut friction = memories.clone();
+        match island_passes(cables, members, &mut ends, &mut friction, owns, contacts, bodies, inputs, h, count, n) {
             Ok(()) => {
+                cables[members[0]].free_friction = starts.iter().map(|b| b.handle).zip(friction).collect();
                 // The ropes' impulse on each free body, to rapier.
                 let gravity = cables[members[0]].cable.model.chain.gravity;
                 for (b0, b1) in starts.iter().zip(&ends) {
@@ -1558,6 +1605,7 @@ fn island_passes(
     cables: &mut [&mut CoupledCable],
     members: &[usize],
     free: &mut [BodyPass],
+    friction: &mut [contact::FrictionMemory],
     owns: &[Vec<rp::RigidBodyHandle>],
     contacts: &Contacts<'_>,
     bodies: &rp::RigidBodySet,
@@ -1592,7 +1640,7 @@ fn island_passes(
             let index = list.len() + chains.len();
             let input = inputs(body.handle);
             let lumped = lumped_of(rb);
-            let chain = FreeBody::new(
+            let mut chain = FreeBody::new(
                 lumped.mass,
                 lumped.com,
                 lumped.inertia,
@@ -1606,6 +1654,9 @@ fn island_passes(
                 t,
             )
             .map_err(|source| (t, CableError::Integrate(crate::integrate::IntegrateError::System { t, source })))?;
+            if body.grounded {
+                contact::add_free_body_contacts(&mut chain, body.handle, &mut friction[b], contacts, bodies, hp, t, start);
+            }
             let shapes = contact::BodyShapes::of(rb, contacts.colliders);
             let speed = body.velocity.length() + body.angular_velocity.length() * contact::body_extent(rb, contacts.colliders);
             for (c, (cable, settings)) in list.iter().enumerate() {
@@ -1647,7 +1698,8 @@ fn island_passes(
         }
         for (b, chain) in &chains {
             let ((origin, rotation), (velocity, angular_velocity)) = (chain.pose(), chain.velocity());
-            free[*b] = BodyPass { handle: free[*b].handle, origin, rotation, velocity, angular_velocity };
+            free[*b] = BodyPass { origin, rotation, velocity, angular_velocity, ..free[*b] };
+            friction[*b].remember(chain.state.t, chain.chain.force_element_points());
         }
         // The friction states of the pairs between members and bodies (each
         // kept by its first point's cable), after every pass.
@@ -1782,10 +1834,13 @@ fn rapier_touches(rb: &rp::RigidBody, narrow_phase: &rp::NarrowPhase, counts: im
 /// thrown up at 3 m/s). A body that rapier's contacts with other dynamic
 /// bodies alone touched (a crate landing on it) is put on the island's
 /// pose with rapier's velocities: rapier had pushed a crate lying on ropes
-/// into them. One that touches a fixed or kinematic collider (the ground),
-/// or that rapier damped, keeps rapier's pose and velocities: the island
-/// does not hold those contacts, and on its pose a box on the ground under
-/// a rope sank 5 cm into it.
+/// into them. Its contacts with fixed and kinematic colliders (the ground)
+/// were solved in the island when it is `grounded`
+/// ([`contact::add_free_body_contacts`]): rapier's only repeated them.
+/// Otherwise one that touches such a collider, or that rapier damped,
+/// keeps rapier's pose and velocities: the island did not hold those
+/// contacts, and on its pose a box on the ground under a rope sank 5 cm
+/// into it.
 fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
     let Some(rb) = bodies.get(end.handle) else {
         return;
@@ -1798,7 +1853,13 @@ fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::C
         return;
     };
     let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-5 * (1.0 + b.length());
-    if held || rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0 || !(touched || close(rb.linvel().as_dvec3(), end.velocity)) {
+    if rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0 {
+        return;
+    }
+    // A body whose contacts with fixed and kinematic colliders the island
+    // solved (`add_free_body_contacts`) has no joint either: rapier's
+    // ground contact only repeated the island's.
+    if !end.grounded && (held || !(touched || close(rb.linvel().as_dvec3(), end.velocity))) {
         return;
     }
     rb.set_position(rp::Pose::from_parts(end.origin.as_vec3(), DQuat::from_mat3(&end.rotation).normalize().as_quat()), false);
