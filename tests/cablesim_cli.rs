@@ -61,6 +61,25 @@ fn divergence_exits_3_and_keeps_the_rows() {
     assert!(csv.lines().count() >= 2, "rows up to the failure are kept");
 }
 
+/// A rope laid with its centre on the ground (`rope_on_ground.toml` with
+/// the path at y = 0 instead of a radius up) stops at t = 0 with status 3
+/// and a message naming the cable, the node, the depth and what to do.
+#[test]
+fn a_rope_laid_into_the_ground_stops_at_once_naming_the_node() {
+    let dir = tmp("inside");
+    let f = dir.join("inside.toml");
+    let scenario = std::fs::read_to_string("assets/scenarios/rope_on_ground.toml").unwrap();
+    let into = scenario.replace("path = [[-5.0, 0.011, 0.0], [5.0, 0.011, 0.0]]", "path = [[-5.0, 0.0, 0.0], [5.0, 0.0, 0.0]]");
+    assert_ne!(into, scenario);
+    std::fs::write(&f, into).unwrap();
+    let o = cablesim().arg("run").arg(&f).arg("--out").arg(dir.join("out")).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    println!("{err}");
+    assert_eq!(o.status.code(), Some(3));
+    assert!(err.contains("cable `rope` failed at t = 0 s: rope 0's node 0 starts 0.0100 m inside a collider"), "{err}");
+    assert!(err.contains("at least its radius (0.01 m)"), "{err}");
+}
+
 /// A second run into the same folder without `--plot` leaves no stale plot
 /// of the first; results.csv holds the second run's rows only.
 #[test]

@@ -307,3 +307,65 @@ fn a_box_carrying_a_rope_slides_down_a_slope_at_the_coulomb_rate() {
     assert!(on_box && creep < 0.01, "the rope should ride on the box: on it {on_box}, {creep} m from its centre");
     assert!((a / expected - 1.0).abs() < 0.01, "box and rope should slide at g (sin θ − μ cos θ) = {expected} m/s², not {a}");
 }
+
+/// A rope laid into a collider is refused, named, at its first step
+/// (`CableErrorKind::Configuration`): a free 3 m steel rope (20 mm) laid
+/// level along a 10° slope's fall line, 0.215 m above it in the middle
+/// (its uphill end's surface 5.9 cm into it; a box resting on the slope
+/// beside it), and the same rope laid on flat ground with its centre on
+/// the surface (its surface a radius in: the first layout a new user
+/// tries). Laid a radius up, on the ground, it is accepted and stays
+/// there. Before (2026-11-27), the first rope was thrown 2.6 km up by the
+/// contact law with no error; the second failed its first step with a
+/// singular matrix; so did the same rope laid only 10 µm into the ground
+/// ("Newton did not converge at t = 0 s"): refused now.
+#[test]
+fn a_rope_laid_into_a_collider_is_refused_at_its_first_step() {
+    let run = |slope: f32, y: f32| {
+        let rot = Quat::from_rotation_z(slope.to_radians());
+        let mut app = plugin_app::headless_app(1.0 / 60.0);
+        let w = app.world_mut();
+        w.spawn((RigidBody::Fixed, Transform::from_rotation(rot).with_translation(rot * Vec3::new(0.0, -0.5, 0.0)), Collider::cuboid(20.0, 0.5, 20.0)));
+        w.spawn((
+            RigidBody::Dynamic,
+            Collider::cuboid(0.4, 0.1, 0.4),
+            ColliderMassProperties::Mass(20.0),
+            Transform::from_translation(rot * Vec3::new(0.0, 0.1, 0.0)).with_rotation(rot),
+        ));
+        let rope = w
+            .spawn(
+                CableDescriptor::new(3.0)
+                    .material(RopeMaterial::steel_6x36_iwrc(0.02))
+                    .segments(30)
+                    .start(CableAnchor::Free)
+                    .path([Vec3::new(-1.5, y, 1.0), Vec3::new(1.5, y, 1.0)]),
+            )
+            .id();
+        let mut errors = Vec::new();
+        for _ in 0..30 {
+            app.update();
+            errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain());
+        }
+        let top = app.world().get::<CableState>(rope).map_or(f32::NAN, |s| s.nodes.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max));
+        (errors, top)
+    };
+    for (slope, y, depth) in [(10.0, 0.215, "0.058"), (0.0, 0.0, "0.0100")] {
+        let (errors, _) = run(slope, y);
+        println!("slope {slope}°, laid at {y} m: {:?}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>());
+        assert_eq!(errors.len(), 1, "{errors:?}");
+        let e = &errors[0];
+        assert_eq!((e.kind, e.time), (CableErrorKind::Configuration, 0.0));
+        let node = if slope > 0.0 { "node 30" } else { "node 0" };
+        assert!(
+            e.message.contains(&format!("{node} starts {depth}"))
+                && e.message.contains("inside a collider")
+                && e.message.contains("at least its radius (0.01 m)"),
+            "{}",
+            e.message
+        );
+    }
+    let (errors, top) = run(0.0, 0.01);
+    println!("laid on the ground: errors {errors:?}, highest node after 0.5 s {top} m");
+    assert!(errors.is_empty(), "{errors:?}");
+    assert!(top < 0.0101, "a rope laid on the ground should stay on it: highest node {top} m");
+}

@@ -186,7 +186,7 @@ fn run(file: &Path, out: Option<PathBuf>, plot: bool, quiet: bool) -> ExitCode {
         eprintln!("error: {e}");
     }
     if let Some(e) = failure {
-        eprintln!("error: simulation diverged: {e}\n       {} rows up to t = {} s written to {}", rec.len(), world.time, dir.display());
+        eprintln!("error: simulation stopped: {e}\n       {} rows up to t = {} s written to {}", rec.len(), world.time, dir.display());
         return ExitCode::from(3);
     }
     if written.is_err() {

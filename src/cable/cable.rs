@@ -47,6 +47,31 @@ pub enum CableError {
         /// What is wrong.
         reason: String,
     },
+    /// A rope laid into a collider: at the cable's first step, a node's
+    /// surface starts deeper inside a fixed or kinematic collider than
+    /// [`STARTS_INSIDE`](crate::coupling::STARTS_INSIDE) times the rope's
+    /// radius (a rope laid with its centre on a surface is). The contact
+    /// law would throw the rope out with the energy of that depth (a rope
+    /// laid with one end 5 cm into a slope was thrown 2.6 km up), or fail
+    /// to solve the first step, so the cable is refused instead.
+    #[error(
+        "rope {rope}'s node {node} starts {depth:.4} m inside a collider, at ({:.4}, {:.4}, {:.4}) m: lay the rope with its centre at least its radius ({radius} m) from colliders' surfaces, or turn its contacts off",
+        point.x,
+        point.y,
+        point.z
+    )]
+    StartsInside {
+        /// Rope of the chain ([`Cable::rope`]; 0 for a single rope).
+        rope: usize,
+        /// Node index from that rope's start.
+        node: usize,
+        /// The node's position, world, m.
+        point: DVec3,
+        /// How deep its surface lies inside the collider's, m.
+        depth: f64,
+        /// The rope's radius, m.
+        radius: f64,
+    },
     /// The state left physical sense (non-finite, or an element stretched
     /// or compressed by more than its length).
     #[error("cable diverged at t = {time} s: {reason}")]

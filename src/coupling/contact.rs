@@ -471,7 +471,9 @@ fn nearest(shape: &dyn rp::Shape, p: DVec3) -> Option<(DVec3, DVec3, f64)> {
 /// element whose nearest point to the collider lies inside it, nearer
 /// than both its nodes (a rope over an edge). `h` (s) sets the margin:
 /// `2 h |v| + h² |g|` plus the rope's radius beyond the rope's surface at
-/// the step's start (`v` the faster of the element's nodes).
+/// the step's start (`v` the faster of the element's nodes). Returns how
+/// fast the contacts may close (m/s), and the node whose surface lies
+/// deepest inside a collider ([`Deepest`]; none if none is inside).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn add_contacts(
     cable: &mut Cable,
@@ -482,8 +484,9 @@ pub(crate) fn add_contacts(
     exclude: &[rp::RigidBodyHandle],
     h: f64,
     start: f64,
-) -> f64 {
+) -> (f64, Option<Deepest>) {
     let mut approach = 0.0f64;
+    let mut deepest: Option<Deepest> = None;
     let radius = 0.5 * cable.model.diameter;
     let gravity = cable.model.chain.gravity.length();
     let obstacles = Obstacle::all(world, bodies, exclude, cable.time(), start);
@@ -540,6 +543,9 @@ pub(crate) fn add_contacts(
                 // not (the step's contact passes follow it).
                 let (q, normal) = (obstacle.origin + obstacle.rotation * hit.0, obstacle.rotation * hit.1);
                 approach = approach.max(-(velocities[k] - obstacle.surface_velocity(q)).dot(normal));
+                if radius - hit.2 > deepest.map_or(0.0, |d| d.depth) {
+                    deepest = Some(Deepest { rope, node: k, point: nodes[k], depth: radius - hit.2 });
+                }
                 if hit.2 - radius <= reach_k {
                     add(memory, 2 * k, k as f64 * element_length, hit, 0.0);
                 }
@@ -572,7 +578,21 @@ pub(crate) fn add_contacts(
             debug_assert!(added, "rope {rope} exists");
         }
     }
-    approach
+    (approach, deepest)
+}
+
+/// A rope node whose surface lies inside a collider ([`add_contacts`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Deepest {
+    /// Rope of the chain.
+    pub rope: usize,
+    /// Node index from that rope's start.
+    pub node: usize,
+    /// The node, world, m.
+    pub point: DVec3,
+    /// How deep its surface lies inside the collider's, m (its radius
+    /// less its centre's distance from the collider's surface).
+    pub depth: f64,
 }
 
 /// The contact law of a carried body's touch points: steel on steel,

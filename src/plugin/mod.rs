@@ -102,7 +102,12 @@
 //! * [`CableErrorKind::Configuration`]: the cable cannot be built as
 //!   described (a bad field, an anchor on an entity without a rapier body,
 //!   a load off the rope, a refused topology, locked axes, a failed static
-//!   start). It is not built; its [`CableDescriptor`] is removed.
+//!   start). It is not built; its [`CableDescriptor`] is removed. A rope
+//!   with contacts laid into a fixed or kinematic collider (a node's
+//!   surface more than half its radius inside it: a rope laid with its
+//!   centre on the ground is) is refused with this kind at its first
+//!   step, and stops there. Lay ropes with their centre a radius above
+//!   the surfaces they rest on.
 //! * [`CableErrorKind::InvalidInput`]: a NaN or infinite `ExternalForce`,
 //!   `GravityScale`, `Damping`, `Velocity` write or `ExternalImpulse` on a
 //!   carried body, named. The cable stops before the step.

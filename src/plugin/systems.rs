@@ -388,7 +388,9 @@ pub(crate) fn step_cables(
         each,
     );
     for (i, t, e) in failures {
-        stop(&mut errors, &ropes, CableError::new(list[i].0, CableErrorKind::Diverged, t, e.to_string()));
+        // A rope laid into a collider is the user's layout, not a failed solve.
+        let kind = if matches!(e, crate::cable::CableError::StartsInside { .. }) { CableErrorKind::Configuration } else { CableErrorKind::Diverged };
+        stop(&mut errors, &ropes, CableError::new(list[i].0, kind, t, e.to_string()));
     }
 }
 
