@@ -755,24 +755,32 @@ pub(crate) fn touches_are_solved(rb: &rp::RigidBody, colliders: &rp::ColliderSet
     rb.colliders().iter().filter_map(|c| colliders.get(*c)).filter(|c| !c.is_sensor()).all(|c| !touch_points(c.shape()).is_empty())
 }
 
+/// Most a free body may start inside a fixed or kinematic collider (a
+/// touch point's depth, m) for an island to solve its contacts with them
+/// ([`out_of_obstacles`]): rapier's resting contacts sink about 70 µm.
+pub(crate) const GROUNDED_DEPTH: f64 = 1e-3;
+
 /// Where a free body of an island (the rapier body `handle` with its
-/// frame at `origin`, turned by `rotation`) starts its step: moved out of
-/// the fixed and kinematic colliders it sinks into, along the deepest
-/// touch point's normal, a few times over. Rapier's resting contact lets
-/// a box on the ground sink about 70 µm (its allowed error); the island's
-/// steel contact law, met at that depth, threw a 20 kg box 6 mm up when it
-/// joined a rope's step (a rope let go on it). Moving the body out adds
-/// no velocity.
+/// frame at `origin`, turned by `rotation`) may start its step with its
+/// contacts with fixed and kinematic colliders solved in the island: moved
+/// out of those it sinks into (when `move_out`), along the deepest touch
+/// point's normal, a few times over; `None` if a touch point lies deeper
+/// than [`GROUNDED_DEPTH`] in one (then rapier keeps those contacts, as it
+/// resolves overlaps gently: a crate laid half into the ground at a ramp's
+/// foot, in the island's steel contact law, was thrown 1.6 km). Rapier's
+/// resting contact lets a box on the ground sink about 70 µm (its allowed
+/// error); the island's steel contact law, met at that depth, threw a
+/// 20 kg box 6 mm up when it joined a rope's step (a rope let go on it).
+/// Moving the body out adds no velocity.
 pub(crate) fn out_of_obstacles(
     handle: rp::RigidBodyHandle,
     (origin, rotation): (DVec3, DMat3),
     world: &Contacts<'_>,
     bodies: &rp::RigidBodySet,
     now: f64,
-) -> DVec3 {
-    let Some(rb) = bodies.get(handle) else {
-        return origin;
-    };
+    move_out: bool,
+) -> Option<DVec3> {
+    let rb = bodies.get(handle)?;
     let obstacles = Obstacle::all(world, bodies, &[handle], now, now);
     let points: Vec<(DVec3, f64)> = rb
         .colliders()
@@ -803,11 +811,12 @@ pub(crate) fn out_of_obstacles(
             }
         }
         match deepest {
-            Some((depth, normal)) => origin += normal * depth,
-            None => break,
+            Some((depth, _)) if depth > GROUNDED_DEPTH => return None,
+            Some((depth, normal)) if move_out => origin += normal * depth,
+            _ => break,
         }
     }
-    origin
+    Some(origin)
 }
 
 /// Adds this pass's contacts of a free body of an island (the rapier body

@@ -1537,7 +1537,7 @@ fn advance_island(
         .collect();
     let mut memories: Vec<contact::FrictionMemory> = Vec::with_capacity(kept.len());
     let mut starts: Vec<BodyPass> = Vec::with_capacity(kept.len());
-    for (&(handle, grounded), memory) in island.bodies.iter().zip(kept) {
+    for (&(handle, solvable), memory) in island.bodies.iter().zip(kept) {
         let Some(rb) = bodies.get(handle) else {
             continue;
         };
@@ -1547,9 +1547,13 @@ fn advance_island(
         // (One that goes on comes from the island's pose, whose contact
         // preload the move would take away: a box sliding down a slope
         // under a rope then started every step with no normal force and
-        // no friction, and slid 7 % faster than Coulomb's rate.)
-        if grounded && memory.is_none() {
-            origin = contact::out_of_obstacles(handle, (origin, rotation), contacts, bodies, start);
+        // no friction, and slid 7 % faster than Coulomb's rate.) One sunk
+        // deeper is left to rapier's contacts this step.
+        let mut grounded = false;
+        if solvable {
+            if let Some(out) = contact::out_of_obstacles(handle, (origin, rotation), contacts, bodies, start, memory.is_none()) {
+                (origin, grounded) = (out, true);
+            }
         }
         starts.push(BodyPass { handle, grounded, origin, rotation, velocity: rb.linvel().as_dvec3(), angular_velocity: rb.angvel().as_dvec3() });
         memories.push(memory.unwrap_or_default());
