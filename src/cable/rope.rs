@@ -348,7 +348,11 @@ impl RopeBuilder {
         self
     }
     /// Initial centreline polyline (world, m). Its first point must be the
-    /// start anchor point. A path longer than the rope pre-strains it.
+    /// start anchor point. A path longer than the rope pre-strains a rope
+    /// held at both ends (up to its breaking strain, else
+    /// [`RopeError::InitialStretch`]); a rope with a free end lies along it
+    /// unstretched from its held end (its start if both are free) and
+    /// ends where its length does.
     pub fn path(mut self, points: Vec<DVec3>) -> Self {
         self.path = Some(points);
         self
@@ -467,7 +471,18 @@ impl RopeBuilder {
             Some(p) => p.clone(),
             None => vec![start, start + DVec3::new(0.0, -self.length, 0.0)],
         };
+        // A rope with a free end cannot hold a stretch (released, it
+        // snaps back along its whole length: a free 4 m steel rope laid on
+        // a path 0.4 mm longer failed its solve at 0.16 s, one on a path
+        // 1 % longer was "strained by 226 %" at its first step): laid
+        // along a path longer than itself, it lies along the path from its
+        // held end (its start if both are free) and ends where its length
+        // does.
+        let free_end = matches!(self.end, RopeEnd::Free);
+        let path = if (free_start || free_end) && !self.stress_free_shape { along_for(&path, self.length, free_start && !free_end)? } else { path };
         let nodes = resample(&path, n)?;
+        // (A free start is where the rope now begins.)
+        let start = if free_start { nodes[0] } else { start };
         if !self.stress_free_shape {
             let path_length: f64 = nodes.windows(2).map(|w| w[0].distance(w[1])).sum();
             let limit = if s.min_breaking_load > 0.0 { s.min_breaking_load / s.ea } else { 0.02 };
@@ -680,6 +695,36 @@ impl RopeBuilder {
 }
 
 /// Resamples a polyline at `n + 1` points equally spaced in arc length.
+/// `path` cut where it reaches `length` (m) along it from its first
+/// point (or from its last, `from_end`); `path` itself if it is no longer.
+fn along_for(path: &[DVec3], length: f64, from_end: bool) -> Result<Vec<DVec3>, RopeError> {
+    if path.len() < 2 || path.iter().any(|p| !p.is_finite()) {
+        // (`resample` names the fault.)
+        return Ok(path.to_vec());
+    }
+    let mut points: Vec<DVec3> = path.to_vec();
+    if from_end {
+        points.reverse();
+    }
+    let mut cut = vec![points[0]];
+    let mut left = length;
+    for w in points.windows(2) {
+        let d = w[0].distance(w[1]);
+        if d >= left {
+            if d > 0.0 {
+                cut.push(w[0].lerp(w[1], left / d));
+            }
+            if from_end {
+                cut.reverse();
+            }
+            return Ok(cut);
+        }
+        left -= d;
+        cut.push(w[1]);
+    }
+    Ok(path.to_vec())
+}
+
 fn resample(path: &[DVec3], n: usize) -> Result<Vec<DVec3>, RopeError> {
     if path.len() < 2 {
         return Err(RopeError::InvalidPath("needs at least 2 points".into()));

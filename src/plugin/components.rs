@@ -302,7 +302,10 @@ impl CableDescriptor {
     /// released (a rope laid strongly bent between two posts whips and may
     /// fail to converge). A path that turns back on itself by more than
     /// 179.9° at one node (a fold laid flat) is refused with a
-    /// [`CableError`] naming the place.
+    /// [`CableError`] naming the place. A path longer than the rope
+    /// stretches a rope anchored at both ends; a rope with a free end
+    /// ([`CableAnchor::Free`]) lies along it unstretched from its anchored
+    /// end (its start if both are free) and ends where its length does.
     pub fn path(mut self, path: impl IntoIterator<Item = Vec3>) -> Self {
         self.path = Some(path.into_iter().collect());
         self
