@@ -369,3 +369,68 @@ fn a_rope_laid_into_a_collider_is_refused_at_its_first_step() {
     assert!(errors.is_empty(), "{errors:?}");
     assert!(top < 0.0101, "a rope laid on the ground should stay on it: highest node {top} m");
 }
+
+/// A free body's rapier `Damping` inside a rope's step: a 20 kg box with
+/// linear damping 0.5 1/s on frictionless ground, launched at 1 m/s along
+/// x, carrying a free 0.6 m steel rope (0.96 kg) laid across its top (let
+/// go at rest, it is carried along by friction within 0.4 s, then sticks:
+/// rope–box friction 0.25 against the 0.05 it needs). Rapier's
+/// `dv/dt = −c v` on the box alone slows box and rope together at the
+/// rate `M c / (M + m)` = 0.47710 1/s: `v(1.5 s) / v(0.5 s) = e^(−0.47710)`.
+/// (Before, 2026-11-27, a damped body kept rapier's pose after the rope's
+/// step, and a rope let go on a damped box on the ground was thrown 139 m
+/// up.)
+#[test]
+fn a_damped_box_carrying_a_rope_slows_at_the_damped_rate() {
+    let mut app = plugin_app::headless_app(1.0 / 60.0);
+    let w = app.world_mut();
+    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(30.0, 0.5, 5.0), Friction::coefficient(0.0)));
+    let block = w
+        .spawn((
+            RigidBody::Dynamic,
+            Collider::cuboid(0.4, 0.1, 0.4),
+            ColliderMassProperties::Mass(20.0),
+            Friction::coefficient(0.0),
+            Damping { linear_damping: 0.5, angular_damping: 0.5 },
+            Velocity::linear(Vec3::X),
+            Transform::from_xyz(0.0, 0.1, 0.0),
+        ))
+        .id();
+    let rope = w
+        .spawn(
+            CableDescriptor::new(0.6)
+                .material(RopeMaterial::steel_6x36_iwrc(0.02))
+                .segments(6)
+                .damping(0.05)
+                .friction(0.5)
+                .start(CableAnchor::Free)
+                .path([Vec3::new(0.0, 0.2105, -0.3), Vec3::new(0.0, 0.2105, 0.3)]),
+        )
+        .id();
+    let (mut errors, mut speeds, mut creep, mut at) = (Vec::new(), Vec::new(), 0.0f32, None);
+    for step in 1..=90 {
+        app.update();
+        errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()));
+        let (p, v) = (app.world().get::<Transform>(block).unwrap().translation, app.world().get::<Velocity>(block).unwrap().linear);
+        speeds.push((step, v.x));
+        if let Some(st) = app.world().get::<CableState>(rope) {
+            // (From 0.5 s: the rope, let go at rest, is carried along by
+            // friction in the first 0.4 s.)
+            let x = st.nodes.iter().map(|n| n.x - p.x).sum::<f32>() / st.nodes.len() as f32;
+            if step >= 30 {
+                let x0 = *at.get_or_insert(x);
+                creep = creep.max((x - x0).abs());
+            }
+        }
+    }
+    let speed = |step: usize| speeds.iter().find(|(s, _)| *s == step).unwrap().1 as f64;
+    let ratio = speed(90) / speed(30);
+    let expected = (-20.0f64 * 0.5 / (20.0 + 0.6 * 1.6)).exp();
+    println!(
+        "v(1.5 s)/v(0.5 s) = {ratio:.5} (closed form {expected:.5}): {:+.2e}; the rope moved {creep:.5} m on the box from 0.5 s; errors {errors:?}",
+        ratio / expected - 1.0
+    );
+    assert!(errors.is_empty(), "{errors:?}");
+    assert!(creep < 1e-3, "the rope should ride on the box: it moved {creep} m on it");
+    assert!((ratio / expected - 1.0).abs() < 5e-3, "box and rope should slow at M c / (M + m): ratio {ratio}, closed form {expected}");
+}

@@ -1670,6 +1670,13 @@ fn island_passes(
             .map_err(|source| (t, CableError::Integrate(crate::integrate::IntegrateError::System { t, source })))?;
             if body.grounded {
                 contact::add_free_body_contacts(&mut chain, body.handle, &mut friction[b], contacts, bodies, hp, t, start);
+                // Its `Damping`, in the solve (after its contacts: their
+                // friction memory counts the force elements from the first).
+                let (linear, angular) = (rb.linear_damping() as f64, rb.angular_damping() as f64);
+                if linear != 0.0 || angular != 0.0 {
+                    let element = BodyDamping { linear: lumped.mass * linear, angular: lumped.inertia * angular };
+                    chain.chain.forces_mut().push(crate::cable::AttachedForce { link: FreeBody::LINK, local_point: lumped.com, element: Arc::new(element) });
+                }
             }
             let shapes = contact::BodyShapes::of(rb, contacts.colliders);
             let speed = body.velocity.length() + body.angular_velocity.length() * contact::body_extent(rb, contacts.colliders);
@@ -1879,12 +1886,13 @@ fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::C
         return;
     };
     let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-5 * (1.0 + b.length());
-    if rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0 {
+    // A body whose contacts with fixed and kinematic colliders the island
+    // solved (`add_free_body_contacts`), and its damping (`BodyDamping`),
+    // has no joint either: rapier's ground contact and damping only
+    // repeated the island's.
+    if !end.grounded && (rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0) {
         return;
     }
-    // A body whose contacts with fixed and kinematic colliders the island
-    // solved (`add_free_body_contacts`) has no joint either: rapier's
-    // ground contact only repeated the island's.
     if !end.grounded && (held || !(touched || close(rb.linvel().as_dvec3(), end.velocity))) {
         return;
     }
@@ -1892,6 +1900,26 @@ fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::C
     if !touched {
         rb.set_linvel(end.velocity.as_vec3(), false);
         rb.set_angvel(end.angular_velocity.as_vec3(), false);
+    }
+}
+
+/// A free body's rapier `Damping` in an island's solve: the force
+/// `−linear · v` at its centre of mass (`linear` = mass × rapier's linear
+/// damping, N·s/m) and the moment `−R angular Rᵀ ω` (`angular` = the
+/// body-frame inertia × rapier's angular damping, N·m·s), rapier's
+/// `dv/dt = −c v` and `dω/dt = −c ω` made implicit.
+struct BodyDamping {
+    linear: f64,
+    angular: DMat3,
+}
+
+impl crate::cable::ForceElement for BodyDamping {
+    fn wrench(&self, _t: f64, at: &crate::cable::PointState) -> crate::cable::PointWrench {
+        let turn = at.rotation * self.angular * at.rotation.transpose();
+        let mut w = crate::cable::PointWrench { force: -at.velocity * self.linear, moment: -(turn * at.angular_velocity), ..Default::default() };
+        w.damping.a = turn;
+        w.damping.d = DMat3::from_diagonal(DVec3::splat(self.linear));
+        w
     }
 }
 
