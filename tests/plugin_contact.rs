@@ -234,6 +234,18 @@ fn a_box_on_the_ground_under_a_rope_stays_on_the_ground() {
     assert!(top < 0.25, "the rope should drape over the box, not be thrown off it: highest node {top} m");
 }
 
+/// A free 0.6 m, 20 mm steel rope (damping 0.05 s, friction 0.5) laid
+/// along z with its middle at `middle` (m): laid across a box's top.
+fn short_rope_across(middle: Vec3) -> CableDescriptor {
+    CableDescriptor::new(0.6)
+        .material(RopeMaterial::steel_6x36_iwrc(0.02))
+        .segments(6)
+        .damping(0.05)
+        .friction(0.5)
+        .start(CableAnchor::Free)
+        .path([middle - Vec3::Z * 0.3, middle + Vec3::Z * 0.3])
+}
+
 /// A free body's friction with the ground inside a rope's step: a 20 kg
 /// box (friction 0.3 with the slope) on a 30° slope, carrying a free
 /// 0.6 m steel rope (20 mm, 0.96 kg) laid across its top. The rope sticks
@@ -266,18 +278,7 @@ fn a_box_carrying_a_rope_slides_down_a_slope_at_the_coulomb_rate() {
             Transform::from_translation(rot * Vec3::new(0.0, 0.1, 0.0)).with_rotation(rot),
         ))
         .id();
-    let top = rot * Vec3::new(0.0, 0.2105, 0.0);
-    let rope = w
-        .spawn(
-            CableDescriptor::new(0.6)
-                .material(RopeMaterial::steel_6x36_iwrc(0.02))
-                .segments(6)
-                .damping(0.05)
-                .friction(0.5)
-                .start(CableAnchor::Free)
-                .path([top - Vec3::Z * 0.3, top + Vec3::Z * 0.3]),
-        )
-        .id();
+    let rope = w.spawn(short_rope_across(rot * Vec3::new(0.0, 0.2105, 0.0))).id();
     let down = rot * Vec3::NEG_X;
     let (mut errors, mut speeds, mut on_box, mut creep) = (Vec::new(), Vec::new(), true, 0.0f32);
     for step in 1..=90 {
@@ -396,17 +397,7 @@ fn a_damped_box_carrying_a_rope_slows_at_the_damped_rate() {
             Transform::from_xyz(0.0, 0.1, 0.0),
         ))
         .id();
-    let rope = w
-        .spawn(
-            CableDescriptor::new(0.6)
-                .material(RopeMaterial::steel_6x36_iwrc(0.02))
-                .segments(6)
-                .damping(0.05)
-                .friction(0.5)
-                .start(CableAnchor::Free)
-                .path([Vec3::new(0.0, 0.2105, -0.3), Vec3::new(0.0, 0.2105, 0.3)]),
-        )
-        .id();
+    let rope = w.spawn(short_rope_across(Vec3::new(0.0, 0.2105, 0.0))).id();
     let (mut errors, mut speeds, mut creep, mut at) = (Vec::new(), Vec::new(), 0.0f32, None);
     for step in 1..=90 {
         app.update();
