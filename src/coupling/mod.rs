@@ -1889,11 +1889,11 @@ fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::C
     // A body whose contacts with fixed and kinematic colliders the island
     // solved (`add_free_body_contacts`), and its damping (`BodyDamping`),
     // has no joint either: rapier's ground contact and damping only
-    // repeated the island's.
-    if !end.grounded && (rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0) {
-        return;
-    }
-    if !end.grounded && (held || !(touched || close(rb.linvel().as_dvec3(), end.velocity))) {
+    // repeated the island's. Another keeps rapier's state if rapier did
+    // something the island did not (held it, damped it, or a joint pulled
+    // it).
+    let damped = rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0;
+    if !end.grounded && (damped || held || !(touched || close(rb.linvel().as_dvec3(), end.velocity))) {
         return;
     }
     rb.set_position(rp::Pose::from_parts(end.origin.as_vec3(), DQuat::from_mat3(&end.rotation).normalize().as_quat()), false);
