@@ -638,6 +638,12 @@ fn touch_points(shape: &dyn rp::Shape) -> Vec<(DVec3, f64)> {
     Vec::new()
 }
 
+/// [`touch_points`] of `collider`, in its body's frame (m).
+fn placed_touch_points(collider: &rp::Collider) -> Vec<(DVec3, f64)> {
+    let (lt, lr) = offset(collider);
+    touch_points(collider.shape()).into_iter().map(|(q, radius)| (lt + lr * q, radius)).collect()
+}
+
 /// Adds this step's contacts of the bodies the chain carries against the
 /// colliders of fixed and kinematic bodies (their own cable's bodies and
 /// sensors left out): each touch point of each of a body's colliders
@@ -715,8 +721,7 @@ impl BodyTouch {
             if collider.is_sensor() {
                 continue;
             }
-            let (lt, lr) = offset(collider);
-            let points: Vec<(DVec3, f64)> = touch_points(collider.shape()).into_iter().map(|(q, radius)| (lt + lr * q, radius)).collect();
+            let points = placed_touch_points(collider);
             for obstacle in obstacles {
                 let (cmin, cmax) = obstacle.aabb();
                 let co = obstacle.collider;
@@ -782,16 +787,8 @@ pub(crate) fn out_of_obstacles(
 ) -> Option<DVec3> {
     let rb = bodies.get(handle)?;
     let obstacles = Obstacle::all(world, bodies, &[handle], now, now);
-    let points: Vec<(DVec3, f64)> = rb
-        .colliders()
-        .iter()
-        .filter_map(|c| world.colliders.get(*c))
-        .filter(|c| !c.is_sensor())
-        .flat_map(|c| {
-            let (lt, lr) = offset(c);
-            touch_points(c.shape()).into_iter().map(move |(q, radius)| (lt + lr * q, radius))
-        })
-        .collect();
+    let points: Vec<(DVec3, f64)> =
+        rb.colliders().iter().filter_map(|c| world.colliders.get(*c)).filter(|c| !c.is_sensor()).flat_map(placed_touch_points).collect();
     let mut origin = origin;
     for _ in 0..4 {
         let mut deepest: Option<(f64, DVec3)> = None;

@@ -1208,8 +1208,8 @@ pub fn step_cables(
     }
     // Ropes of different cables that touch: such cables form an island,
     // stepped as one system (`advance_island`).
-    let free = free_bodies(cables, bodies, &owns, contacts.colliders, joints);
-    let islands = cable_islands(cables, &free, bodies, contacts.colliders, h);
+    let free = free_bodies(cables, bodies, &owns, contacts.colliders);
+    let islands = cable_islands(cables, &free, bodies, contacts.colliders, joints, h);
     let mut alone = vec![true; cables.len()];
     for island in &islands {
         island.members.iter().for_each(|&i| alone[i] = false);
@@ -1345,25 +1345,22 @@ fn find_contacts(
 /// the passes their closing speed asks for.
 struct Island {
     members: Vec<usize>,
-    /// Each body, and whether the island solves its contacts with fixed
-    /// and kinematic colliders ([`free_bodies`]).
+    /// Each body, and whether the island can solve its contacts with
+    /// fixed and kinematic colliders ([`contact::touches_are_solved`], and
+    /// no joint on it).
     bodies: Vec<(rp::RigidBodyHandle, bool)>,
     passes: u32,
 }
 
 /// The dynamic rapier bodies no cable holds (not a cable's end, carried
 /// body, follower or rail), with colliders, that may touch a rope: each
-/// with a bound on its surface's speed (m/s), and whether an island
-/// solves its contacts with fixed and kinematic colliders too (no joint
-/// holds it, and all its colliders have touch points:
-/// [`contact::touches_are_solved`]).
+/// with a bound on its surface's speed (m/s).
 fn free_bodies(
     cables: &[&mut CoupledCable],
     bodies: &rp::RigidBodySet,
     owns: &[Vec<rp::RigidBodyHandle>],
     colliders: &rp::ColliderSet,
-    joints: &rp::ImpulseJointSet,
-) -> Vec<(rp::RigidBodyHandle, f64, bool)> {
+) -> Vec<(rp::RigidBodyHandle, f64)> {
     if cables.iter().all(|c| c.failed || c.contact.is_none()) {
         return Vec::new();
     }
@@ -1375,17 +1372,14 @@ fn free_bodies(
         .chain(cables.iter().flat_map(|c| c.carried.iter().map(|k| k.body)))
         .chain(cables.iter().flat_map(|c| c.followers.iter().map(|f| f.body)))
         .collect();
-    let mut free: Vec<(rp::RigidBodyHandle, f64, bool)> = bodies
+    let mut free: Vec<(rp::RigidBodyHandle, f64)> = bodies
         .iter()
         .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h))
         .filter(|(_, rb)| rb.colliders().iter().any(|c| colliders.get(*c).is_some_and(|c| !c.is_sensor())))
-        .map(|(h, rb)| {
-            let speed = rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * contact::body_extent(rb, colliders);
-            (h, speed, joints.attached_joints(h).next().is_none() && contact::touches_are_solved(rb, colliders))
-        })
+        .map(|(h, rb)| (h, rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * contact::body_extent(rb, colliders)))
         .collect();
     // (Rapier's arena order: the same on every run.)
-    free.sort_by_key(|(h, _, _)| h.into_raw_parts());
+    free.sort_by_key(|(h, _)| h.into_raw_parts());
     free
 }
 
@@ -1396,9 +1390,10 @@ fn free_bodies(
 /// not listed.
 fn cable_islands(
     cables: &[&mut CoupledCable],
-    free: &[(rp::RigidBodyHandle, f64, bool)],
+    free: &[(rp::RigidBodyHandle, f64)],
     bodies: &rp::RigidBodySet,
     colliders: &rp::ColliderSet,
+    joints: &rp::ImpulseJointSet,
     h: f64,
 ) -> Vec<Island> {
     let candidates: Vec<usize> = (0..cables.len()).filter(|&i| !cables[i].failed && cables[i].contact.is_some()).collect();
@@ -1425,7 +1420,7 @@ fn cable_islands(
         join(&mut root, p.cable_a, p.cable_b);
     }
     approach.resize(nodes, 0.0);
-    for (k, &(handle, speed, _)) in free.iter().enumerate() {
+    for (k, &(handle, speed)) in free.iter().enumerate() {
         let Some(rb) = bodies.get(handle) else {
             continue;
         };
@@ -1459,8 +1454,13 @@ fn cable_islands(
         if k < candidates.len() {
             island.members.push(candidates[k]);
         } else {
-            let (handle, _, solved) = free[k - candidates.len()];
-            island.bodies.push((handle, solved));
+            // Whether the island can solve its contacts with fixed and
+            // kinematic colliders too: no joint holds it, and all its
+            // colliders have touch points (asked of the island's bodies
+            // only, not of every dynamic body at every step).
+            let handle = free[k - candidates.len()].0;
+            let solvable = joints.attached_joints(handle).next().is_none() && bodies.get(handle).is_some_and(|rb| contact::touches_are_solved(rb, colliders));
+            island.bodies.push((handle, solvable));
         }
         island.passes = island.passes.max(contact_passes(approach[k], h));
     }
