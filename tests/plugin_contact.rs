@@ -333,20 +333,8 @@ fn a_rope_laid_into_a_collider_is_refused_at_its_first_step() {
             ColliderMassProperties::Mass(20.0),
             Transform::from_translation(rot * Vec3::new(0.0, 0.1, 0.0)).with_rotation(rot),
         ));
-        let rope = w
-            .spawn(
-                CableDescriptor::new(3.0)
-                    .material(RopeMaterial::steel_6x36_iwrc(0.02))
-                    .segments(30)
-                    .start(CableAnchor::Free)
-                    .path([Vec3::new(-1.5, y, 1.0), Vec3::new(1.5, y, 1.0)]),
-            )
-            .id();
-        let mut errors = Vec::new();
-        for _ in 0..30 {
-            app.update();
-            errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain());
-        }
+        let rope = w.spawn(free_rope_laid_level(y, 1.0)).id();
+        let errors = run_frames(&mut app, 30);
         let top = app.world().get::<CableState>(rope).map_or(f32::NAN, |s| s.nodes.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max));
         (errors, top)
     };
@@ -371,6 +359,26 @@ fn a_rope_laid_into_a_collider_is_refused_at_its_first_step() {
     assert!(top < 0.0101, "a rope laid on the ground should stay on it: highest node {top} m");
 }
 
+/// A free 3 m steel rope (20 mm, 30 elements) laid level along x at
+/// height `y` (m, its centre), from x = −1.5 to 1.5 m at `z` m.
+fn free_rope_laid_level(y: f32, z: f32) -> CableDescriptor {
+    CableDescriptor::new(3.0)
+        .material(RopeMaterial::steel_6x36_iwrc(0.02))
+        .segments(30)
+        .start(CableAnchor::Free)
+        .path([Vec3::new(-1.5, y, z), Vec3::new(1.5, y, z)])
+}
+
+/// Runs `frames` frames and returns the cable errors they reported.
+fn run_frames(app: &mut App, frames: usize) -> Vec<CableError> {
+    let mut errors = Vec::new();
+    for _ in 0..frames {
+        app.update();
+        errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain());
+    }
+    errors
+}
+
 /// A free 3 m steel rope (20 mm, 30 elements) laid 10 µm, 0.1 mm, 1 mm
 /// and 4 mm into the ground (less than the half radius that is refused)
 /// settles on it at the frame step: no error, after 1 s its nodes lie one
@@ -389,20 +397,8 @@ fn a_rope_laid_slightly_into_the_ground_settles_on_it() {
         let w = app.world_mut();
         w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(20.0, 0.5, 20.0)));
         let y = 0.01 - depth;
-        let rope = w
-            .spawn(
-                CableDescriptor::new(3.0)
-                    .material(RopeMaterial::steel_6x36_iwrc(0.02))
-                    .segments(30)
-                    .start(CableAnchor::Free)
-                    .path([Vec3::new(-1.5, y, 0.0), Vec3::new(1.5, y, 0.0)]),
-            )
-            .id();
-        let mut errors = Vec::new();
-        for _ in 0..60 {
-            app.update();
-            errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()));
-        }
+        let rope = w.spawn(free_rope_laid_level(y, 0.0)).id();
+        let errors: Vec<String> = run_frames(&mut app, 60).iter().map(|e| e.to_string()).collect();
         let st = app.world().get::<CableState>(rope).unwrap();
         let (low, high) = st.nodes.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), p| (l.min(p.y), h.max(p.y)));
         let err = st.contact_force / weight - 1.0;
