@@ -120,6 +120,12 @@ pub(crate) struct FrictionMemory {
     /// This step's own pair contacts, in the order of the chain's pair
     /// elements after the fixed ones.
     pair_step: Vec<PairContact>,
+    /// Each body touch point's contact at the end of the last step (open
+    /// ones too, friction or not): its depth then, without its offset,
+    /// and its offset (m): see [`FrictionMemory::sunk`].
+    sunk: HashMap<Site, (f64, f64)>,
+    /// This step's contacts' offsets (m), in the order of `step`.
+    step_sunk: Vec<f64>,
 }
 
 /// A pair contact's friction state kept from one step to the next, found
@@ -199,8 +205,23 @@ impl FrictionMemory {
     /// coefficient `mu` (none if 0). [`FrictionMemory::attach`] gives it
     /// its friction.
     fn note(&mut self, site: Site, contact: SphereContact, mu: f64, fraction: f64, bodies: [Option<rp::RigidBodyHandle>; 2]) -> SphereContact {
+        self.note_sunk(site, contact, mu, fraction, bodies, 0.0)
+    }
+
+    /// [`FrictionMemory::note`] for a contact whose obstacle's surface
+    /// was moved in by `offset` m ([`FrictionMemory::sunk`]).
+    fn note_sunk(
+        &mut self,
+        site: Site,
+        contact: SphereContact,
+        mu: f64,
+        fraction: f64,
+        bodies: [Option<rp::RigidBodyHandle>; 2],
+        offset: f64,
+    ) -> SphereContact {
         self.step.push((site, contact, fraction, mu));
         self.bodies.push(bodies);
+        self.step_sunk.push(offset);
         contact
     }
 
@@ -250,6 +271,16 @@ impl FrictionMemory {
     /// After the step: each contact's anchor for the next one, from the
     /// points of this step's contact force elements at time `t` (s).
     pub(crate) fn remember(&mut self, t: f64, points: impl Iterator<Item = PointState>) {
+        let points: Vec<PointState> = points.collect();
+        self.sunk = self
+            .step
+            .iter()
+            .zip(&self.step_sunk)
+            .zip(&points)
+            .filter(|(((site, ..), _), _)| matches!(site, Site::Body { .. }))
+            .map(|(((site, c, ..), offset), at)| (*site, (c.depth(t, at).0 + offset, *offset)))
+            .collect();
+        self.step_sunk.clear();
         self.anchors =
             self.step.drain(..).zip(points).filter_map(|((site, c, f, _), at)| c.next_anchor(t, &at).map(|a| (site, (a, f, c.normal_force(t, &at))))).collect();
     }
@@ -259,6 +290,25 @@ impl FrictionMemory {
         self.step.clear();
         self.bodies.clear();
         self.pair_step.clear();
+        self.step_sunk.clear();
+    }
+
+    /// How far (m) a body touch point's contact at `site`, starting
+    /// `depth` m inside its obstacle, has its obstacle's surface moved in
+    /// this step: the depth the body did not reach in the cable's or the
+    /// island's own solve. A body rapier put into a collider (laid there,
+    /// or pushed in, beyond [`SUNK_TOLERANCE`]) does not have that overlap
+    /// as elastic energy of the contact's stiff law: its touch points
+    /// start at the depth they ended the last step with (at zero for a
+    /// touch point new to the step), and the offset shrinks only as the
+    /// body comes out. (Taken as elastic, a 30 kg crate laid 5 cm into the
+    /// ground under a rope was thrown, the rope 0.7 m up, and the solve
+    /// failed, 2026-11-27.)
+    fn sunk(&self, site: Site, depth: f64) -> f64 {
+        let (end, offset) = self.sunk.get(&site).copied().unwrap_or((0.0, 0.0));
+        let grown = depth - end;
+        let added = if grown > SUNK_TOLERANCE { grown } else { 0.0 };
+        (offset + added).min(depth.max(0.0))
     }
 
     /// The remembered pair touch nearest to `at` (m, world; the midpoint of
@@ -744,7 +794,10 @@ impl BodyTouch {
                         continue;
                     }
                     let site = Site::Body { collider: *own, point, obstacle: obstacle.handle };
-                    let element = memory.note(site, obstacle.contact(hit, *radius, law), mu, 0.0, [co.parent(), Some(self.body)]);
+                    let mut contact = obstacle.contact(hit, *radius, law);
+                    let offset = memory.sunk(site, radius - hit.2);
+                    contact.point -= contact.normal * offset;
+                    let element = memory.note_sunk(site, contact, mu, 0.0, [co.parent(), Some(self.body)], offset);
                     hits.push(AttachedForce { link: self.link, local_point: self.place.0 + self.place.1 * *q, element: Arc::new(element) });
                 }
             }
@@ -760,23 +813,36 @@ pub(crate) fn touches_are_solved(rb: &rp::RigidBody, colliders: &rp::ColliderSet
     rb.colliders().iter().filter_map(|c| colliders.get(*c)).filter(|c| !c.is_sensor()).all(|c| !touch_points(c.shape()).is_empty())
 }
 
-/// Most a free body may start inside a fixed or kinematic collider (a
-/// touch point's depth, m) for an island to solve its contacts with them
-/// ([`out_of_obstacles`]): rapier's resting contacts sink about 70 µm.
+/// Most a free body new to an island is moved out of the fixed and
+/// kinematic colliders it starts in (a touch point's depth, m;
+/// [`out_of_obstacles`]): rapier's resting contacts sink about 70 µm.
+/// One deeper starts where it is, its contacts' overlap taken as an
+/// offset ([`FrictionMemory::sunk`]): moved out by centimetres, it would
+/// be pushed into a rope lying on it.
 pub(crate) const GROUNDED_DEPTH: f64 = 1e-3;
+
+/// Growth of a body touch point's depth between two steps (m) beyond
+/// which it counts as rapier's doing ([`FrictionMemory::sunk`]): more
+/// than the rounding of a pose to rapier's f32 (about 1e-7 m).
+pub(crate) const SUNK_TOLERANCE: f64 = 1e-6;
 
 /// Where a free body of an island (the rapier body `handle` with its
 /// frame at `origin`, turned by `rotation`) may start its step with its
 /// contacts with fixed and kinematic colliders solved in the island: moved
 /// out of those it sinks into (when `move_out`), along the deepest touch
-/// point's normal, a few times over; `None` if a touch point lies deeper
-/// than [`GROUNDED_DEPTH`] in one (then rapier keeps those contacts, as it
-/// resolves overlaps gently: a crate laid half into the ground at a ramp's
-/// foot, in the island's steel contact law, was thrown 1.6 km). Rapier's
-/// resting contact lets a box on the ground sink about 70 µm (its allowed
-/// error); the island's steel contact law, met at that depth, threw a
-/// 20 kg box 6 mm up when it joined a rope's step (a rope let go on it).
-/// Moving the body out adds no velocity.
+/// point's normal, a few times over, while the deepest is no deeper than
+/// [`GROUNDED_DEPTH`]; `None` only if rapier no longer has the body.
+/// Rapier's resting contact lets a box on the ground sink about 70 µm (its
+/// allowed error); the island's steel contact law, met at that depth,
+/// threw a 20 kg box 6 mm up when it joined a rope's step (a rope let go
+/// on it). Moving the body out adds no velocity. A body sunk deeper stays
+/// where it is, and its contacts start from their overlap
+/// ([`FrictionMemory::sunk`]). (Before, 2026-11-27, such a body was left
+/// to rapier's contacts while the island moved it too: rapier lifted a
+/// crate laid 5 cm into the ground by 1 cm in a step, into a rope lying on
+/// it, which was thrown and failed the solve; and a crate laid half into
+/// the ground, in the island's steel law without the offset, was thrown
+/// 1.6 km.)
 pub(crate) fn out_of_obstacles(
     handle: rp::RigidBodyHandle,
     (origin, rotation): (DVec3, DMat3),
@@ -808,8 +874,7 @@ pub(crate) fn out_of_obstacles(
             }
         }
         match deepest {
-            Some((depth, _)) if depth > GROUNDED_DEPTH => return None,
-            Some((depth, normal)) if move_out => origin += normal * depth,
+            Some((depth, normal)) if move_out && depth <= GROUNDED_DEPTH => origin += normal * depth,
             _ => break,
         }
     }
