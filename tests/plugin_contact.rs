@@ -335,11 +335,15 @@ fn a_rope_laid_into_a_collider_is_refused_at_its_first_step() {
         ));
         let rope = w.spawn(free_rope_laid_level(y, 1.0)).id();
         let errors = run_frames(&mut app, 30);
-        let top = app.world().get::<CableState>(rope).map_or(f32::NAN, |s| s.nodes.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max));
-        (errors, top)
+        let state = app.world().get::<CableState>(rope);
+        let top = state.map_or(f32::NAN, |s| s.nodes.iter().map(|p| p.y).fold(f32::NEG_INFINITY, f32::max));
+        // A refused rope reports no contact force (it reported 3e8 N).
+        let force = state.map_or(f32::NAN, |s| s.contact_force);
+        (errors, top, force)
     };
     for (slope, y, depth) in [(10.0, 0.215, "0.058"), (0.0, 0.0, "0.0100")] {
-        let (errors, _) = run(slope, y);
+        let (errors, _, force) = run(slope, y);
+        assert_eq!(force, 0.0, "a refused rope's contact force");
         println!("slope {slope}°, laid at {y} m: {:?}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>());
         assert_eq!(errors.len(), 1, "{errors:?}");
         let e = &errors[0];
@@ -353,7 +357,7 @@ fn a_rope_laid_into_a_collider_is_refused_at_its_first_step() {
             e.message
         );
     }
-    let (errors, top) = run(0.0, 0.01);
+    let (errors, top, _) = run(0.0, 0.01);
     println!("laid on the ground: errors {errors:?}, highest node after 0.5 s {top} m");
     assert!(errors.is_empty(), "{errors:?}");
     assert!(top < 0.0101, "a rope laid on the ground should stay on it: highest node {top} m");

@@ -1207,6 +1207,10 @@ pub fn step_cables(
                 // (`CableError::StartsInside`).
                 let radius = 0.5 * cc.cable.model.diameter;
                 if let Some(d) = deepest.filter(|d| cc.cable.steps == 0 && d.depth > STARTS_INSIDE * radius) {
+                    // (Its contacts dropped: read at the refused start,
+                    // they reported meganewtons.)
+                    contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
+                    cc.friction.discard_step();
                     cc.failed = true;
                     failures.push((ci, start, CableError::StartsInside { rope: d.rope, node: d.node, point: d.point, depth: d.depth, radius }));
                     owns.push(own);
