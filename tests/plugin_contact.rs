@@ -466,6 +466,67 @@ fn a_rope_let_go_on_a_crate_sunk_into_the_ground_drapes_over_it() {
     }
 }
 
+/// A 30 kg crate (0.8 × 0.4 × 0.8 m) resting on a ramp tilted 10° and
+/// 20° (friction 0.6; the ramp at x = 8 m, as a new user's scene had it),
+/// a free 0.7 m, 16 mm steel rope (friction 0.5) across its top: below
+/// the friction angle (atan 0.55 = 28.8°) nothing creeps, and at rest the
+/// island costs one Newton iteration per frame step. Over the second and
+/// third second the crate and every rope node move less than one f32 step
+/// of their coordinates (1e-6 m at 8 m), and every frame step of the last
+/// second takes one iteration. (Before, 2026-11-27, the crate's pose was
+/// read back from rapier's f32 every frame, up to 0.5 µm off the island's:
+/// micrometre jumps of its stick springs and ground contacts that each
+/// frame had to undo; the rope crept 9.6 and 13.6 µm over those 2 s, and
+/// each frame took 32 sub-steps and 70–95 iterations.)
+#[test]
+fn a_rope_on_a_crate_resting_on_a_ramp_does_not_creep() {
+    for tilt in [10.0f32, 20.0] {
+        let mut app = plugin_app::headless_app(1.0 / 60.0);
+        let w = app.world_mut();
+        let ramp = Quat::from_rotation_z(tilt.to_radians());
+        w.spawn((RigidBody::Fixed, Transform::from_xyz(8.0, 0.0, 0.0).with_rotation(ramp), Collider::cuboid(3.0, 0.05, 2.0), Friction::coefficient(0.6)));
+        let on_ramp = Vec3::new(8.0, 0.0, 0.0) + ramp * Vec3::new(0.0, 0.25, 0.0);
+        let crate_ = w
+            .spawn((
+                RigidBody::Dynamic,
+                Velocity::zero(),
+                Transform::from_translation(on_ramp).with_rotation(ramp),
+                Collider::cuboid(0.4, 0.2, 0.4),
+                ColliderMassProperties::Mass(30.0),
+                Friction::coefficient(0.6),
+            ))
+            .id();
+        let top = on_ramp + ramp * Vec3::new(0.0, 0.209, 0.0);
+        let rope = w
+            .spawn(
+                CableDescriptor::new(0.7)
+                    .material(RopeMaterial::steel_6x36_iwrc(0.016))
+                    .segments(7)
+                    .damping(0.05)
+                    .friction(0.5)
+                    .start(CableAnchor::Free)
+                    .path([top - Vec3::Z * 0.35, top + Vec3::Z * 0.35]),
+            )
+            .id();
+        let mut errors = run_frames(&mut app, 60);
+        let read = |app: &App| (app.world().get::<Transform>(crate_).unwrap().translation, app.world().get::<CableState>(rope).unwrap().nodes.clone());
+        let (crate_at, nodes) = read(&app);
+        errors.extend(run_frames(&mut app, 60));
+        let mut iterations = Vec::new();
+        for _ in 0..60 {
+            errors.extend(run_frames(&mut app, 1));
+            iterations.push(app.world().get::<CableState>(rope).unwrap().newton_iterations);
+        }
+        let (crate_now, nodes_now) = read(&app);
+        let crept = (crate_now - crate_at).length();
+        let rope_crept = nodes_now.iter().zip(&nodes).map(|(a, b)| (*a - *b).length()).fold(0.0f32, f32::max);
+        println!("ramp {tilt}°: crate crept {crept:e} m, rope {rope_crept:e} m over 2 s; Newton iterations per frame step in the last second {iterations:?}");
+        assert!(errors.is_empty(), "{errors:?}");
+        assert!(crept <= 1e-6 && rope_crept <= 1e-6, "ramp {tilt}°: crate crept {crept} m, rope {rope_crept} m");
+        assert!(iterations.iter().all(|&n| n == 1), "ramp {tilt}°: {iterations:?}");
+    }
+}
+
 /// A free body's rapier `Damping` inside a rope's step: a 20 kg box with
 /// linear damping 0.5 1/s on frictionless ground, launched at 1 m/s along
 /// x, carrying a free 0.6 m steel rope (0.96 kg) laid across its top (let

@@ -380,6 +380,10 @@ pub struct CoupledCable {
     /// kinematic colliders, from step to step (on the island's first
     /// cable).
     free_friction: Vec<(rp::RigidBodyHandle, contact::FrictionMemory)>,
+    /// The free bodies [`after_rapier`] put on the island's pose and
+    /// velocities (on the cable that kept them): the island's values (f64)
+    /// and what rapier was given (f32), see [`Written`].
+    free_written: Vec<(BodyPass, Written)>,
     /// Stopped after a failed step.
     pub failed: bool,
     /// The failure of this step's advance (time of the failing sub-step),
@@ -1022,6 +1026,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         free_forces: Vec::new(),
         free_ends: Vec::new(),
         free_friction: Vec::new(),
+        free_written: Vec::new(),
         advance_failure: None,
     })
 }
@@ -1481,6 +1486,21 @@ fn cable_islands(
     islands
 }
 
+/// What [`put_free_body`] gave rapier (f32): the pose, and the velocities
+/// if it set them. A body whose rapier state still reads exactly so at the
+/// next step (nobody moved it) starts that step from the island's own f64
+/// values: read back from rapier, a grounded body's pose was rounded to
+/// f32 every frame (up to 0.5 µm at 8 m from the origin), micrometre jumps
+/// of its stiff ground contacts and stick springs that the next step had
+/// to undo (a crate resting on a 10° ramp under a short rope needed 32
+/// sub-steps per frame, and failed at 16).
+#[derive(Debug, Clone, Copy)]
+struct Written {
+    translation: glam::Vec3,
+    rotation: glam::Quat,
+    velocities: Option<(glam::Vec3, glam::Vec3)>,
+}
+
 /// A free body of an island between passes: its frame's pose and its
 /// centre of mass's and angular velocities (world), and whether the
 /// island solves its contacts with fixed and kinematic colliders.
@@ -1547,7 +1567,20 @@ fn advance_island(
         let Some(rb) = bodies.get(handle) else {
             continue;
         };
-        let (mut origin, rotation) = pose_of(rb);
+        let (mut origin, mut rotation) = pose_of(rb);
+        let (mut velocity, mut angular_velocity) = (rb.linvel().as_dvec3(), rb.angvel().as_dvec3());
+        // The island's own values where rapier still holds what it was
+        // given (`Written`).
+        let written = members.iter().find_map(|&i| cables[i].free_written.iter().find(|(end, _)| end.handle == handle));
+        if let Some((end, w)) = written {
+            let p = rb.position();
+            if p.translation == w.translation && p.rotation == w.rotation {
+                (origin, rotation) = (end.origin, end.rotation);
+                if w.velocities == Some((rb.linvel(), rb.angvel())) {
+                    (velocity, angular_velocity) = (end.velocity, end.angular_velocity);
+                }
+            }
+        }
         // A body new to the island comes from rapier's resting contacts,
         // sunk into the ground by rapier's allowed error: moved out of it.
         // (One that goes on comes from the island's pose, whose contact
@@ -1561,7 +1594,7 @@ fn advance_island(
                 (origin, grounded) = (out, true);
             }
         }
-        starts.push(BodyPass { handle, grounded, origin, rotation, velocity: rb.linvel().as_dvec3(), angular_velocity: rb.angvel().as_dvec3() });
+        starts.push(BodyPass { handle, grounded, origin, rotation, velocity, angular_velocity });
         memories.push(memory.unwrap_or_default());
     }
     // (Those of bodies no longer in the island are dropped.)
@@ -1814,8 +1847,11 @@ pub fn contact_passes(approach: f64, h: f64) -> u32 {
 /// the cable's pose and velocity.
 pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
     for cc in cables.iter_mut() {
+        cc.free_written.clear();
         for end in std::mem::take(&mut cc.free_ends) {
-            put_free_body(end, bodies, colliders, narrow_phase);
+            if let Some(written) = put_free_body(end, bodies, colliders, narrow_phase) {
+                cc.free_written.push((end, written));
+            }
         }
         for k in 0..cc.carried.len() {
             let (p, r, v, w) = cc.carried_state(&cc.carried[k]);
@@ -1880,17 +1916,13 @@ fn rapier_touches(rb: &rp::RigidBody, narrow_phase: &rp::NarrowPhase, counts: im
 /// keeps rapier's pose and velocities: the island did not hold those
 /// contacts, and on its pose a box on the ground under a rope sank 5 cm
 /// into it.
-fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
-    let Some(rb) = bodies.get(end.handle) else {
-        return;
-    };
+fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) -> Option<Written> {
+    let rb = bodies.get(end.handle)?;
     // Rapier's active contacts on the body: with dynamic bodies, and with
     // anything else (fixed or kinematic bodies, colliders without a body).
     let dynamic = |other| owner_is_dynamic(other, bodies, colliders) == Some(true);
     let (touched, held) = (rapier_touches(rb, narrow_phase, dynamic), rapier_touches(rb, narrow_phase, |other| !dynamic(other)));
-    let Some(rb) = bodies.get_mut(end.handle) else {
-        return;
-    };
+    let rb = bodies.get_mut(end.handle)?;
     let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-5 * (1.0 + b.length());
     // A body whose contacts with fixed and kinematic colliders the island
     // solved (`add_free_body_contacts`), and its damping (`BodyDamping`),
@@ -1900,13 +1932,17 @@ fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::C
     // it).
     let damped = rb.linear_damping() != 0.0 || rb.angular_damping() != 0.0;
     if !end.grounded && (damped || held || !(touched || close(rb.linvel().as_dvec3(), end.velocity))) {
-        return;
+        return None;
     }
     rb.set_position(rp::Pose::from_parts(end.origin.as_vec3(), DQuat::from_mat3(&end.rotation).normalize().as_quat()), false);
+    let mut velocities = None;
     if !touched {
         rb.set_linvel(end.velocity.as_vec3(), false);
         rb.set_angvel(end.angular_velocity.as_vec3(), false);
+        velocities = Some((rb.linvel(), rb.angvel()));
     }
+    let p = rb.position();
+    Some(Written { translation: p.translation, rotation: p.rotation, velocities })
 }
 
 /// A free body's rapier `Damping` in an island's solve: the force
