@@ -241,6 +241,18 @@ impl FrictionMemory {
         })
     }
 
+    /// The force (N) and moment about `about` (N·m, world) that the
+    /// contacts put on `body` where it is their obstacle, given each
+    /// contact's point and force on its sphere in order (the opposite
+    /// force, at the sphere's centre).
+    pub(crate) fn wrench_on_obstacle(&self, body: rp::RigidBodyHandle, contacts: impl Iterator<Item = (DVec3, DVec3)>, about: DVec3) -> (DVec3, DVec3) {
+        self.bodies
+            .iter()
+            .zip(contacts)
+            .filter(|([obstacle, _], _)| *obstacle == Some(body))
+            .fold((DVec3::ZERO, DVec3::ZERO), |(f, m), (_, (at, force))| (f - force, m + (at - about).cross(-force)))
+    }
+
     /// Gives each contact noted this step (force elements `fixed..` of
     /// `cable`, at the step's start) its friction: the anchor and the
     /// normal force its site had at the end of the last step (if it was at
@@ -353,6 +365,12 @@ pub struct Contacts<'a> {
     pub colliders: &'a rp::ColliderSet,
     /// A body's exact motion, if the adapter knows it.
     pub motions: &'a dyn Fn(rp::RigidBodyHandle) -> Option<BodyMotion>,
+    /// The dynamic bodies that an impulse joint holds and no cable does:
+    /// the ropes meet them as moving obstacles (rapier's pose moved on
+    /// with their velocities), and their contact forces go back to rapier
+    /// as impulses ([`crate::coupling::step_cables`] fills it; adapters
+    /// pass `&[]`).
+    pub jointed: &'a [rp::RigidBodyHandle],
 }
 
 /// A collider's pose relative to its body (identity without a body).
@@ -421,7 +439,8 @@ impl<'a> Obstacle<'a> {
 
     /// Every collider a rope or a carried body may touch this step, at
     /// `now` (s): not a sensor, not on a dynamic body (see
-    /// [`add_contacts`]) and not on a body in `exclude`.
+    /// [`add_contacts`]) unless a joint holds it ([`Contacts::jointed`]),
+    /// and not on a body in `exclude`.
     fn all(world: &Contacts<'a>, bodies: &'a rp::RigidBodySet, exclude: &[rp::RigidBodyHandle], now: f64, start: f64) -> Vec<Obstacle<'a>> {
         world
             .colliders
@@ -433,7 +452,8 @@ impl<'a> Obstacle<'a> {
                 // 4.4 m/s onto a rope lying on the ground). They need their
                 // inertia in the rope's solve: a free body of the island
                 // (`body_pairs`), or a carried body's link.
-                let dynamic = c.parent().and_then(|p| bodies.get(p)).is_some_and(|rb| rb.is_dynamic());
+                let dynamic =
+                    c.parent().and_then(|p| bodies.get(p)).is_some_and(|rb| rb.is_dynamic()) && !c.parent().is_some_and(|p| world.jointed.contains(&p));
                 !c.is_sensor() && !dynamic && !c.parent().is_some_and(|p| exclude.contains(&p))
             })
             .map(|(h, c)| Obstacle::new(h, c, world, bodies, now, start))

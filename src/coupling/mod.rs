@@ -408,6 +408,16 @@ impl CoupledCable {
         self.friction.force_on(body, forces) + free
     }
 
+    /// The force (N) and moment about `about` (N·m, world) that this
+    /// cable's contacts put on `body` as their obstacle (a jointed body,
+    /// [`Contacts::jointed`]) at the end of the last step.
+    fn obstacle_wrench(&self, body: rp::RigidBodyHandle, about: DVec3) -> (DVec3, DVec3) {
+        let ch = &self.cable.model.chain;
+        let t = self.cable.time();
+        let contacts = ch.forces().iter().zip(ch.force_element_points()).skip(self.fixed_forces).map(|(f, at)| (at.point, f.element.wrench(t, &at).force));
+        self.friction.wrench_on_obstacle(body, contacts, about)
+    }
+
     /// The role of `body` in this cable, if it is attached.
     pub fn role_of(&self, body: rp::RigidBodyHandle) -> Option<Role> {
         self.all_roles().find(|(b, _)| *b == body).map(|(_, r)| *r)
@@ -721,7 +731,7 @@ impl Coupling {
         motions: &dyn Fn(rp::RigidBodyHandle) -> Option<BodyMotion>,
     ) -> Vec<(usize, f64, CableError)> {
         let mut all: Vec<&mut CoupledCable> = self.cables.iter_mut().collect();
-        step_cables(&mut all, bodies, Contacts { colliders, motions }, joints, h, substeps, inputs, &OneByOne)
+        step_cables(&mut all, bodies, Contacts { colliders, motions, jointed: &[] }, joints, h, substeps, inputs, &OneByOne)
     }
 
     /// Phase 2 over every cable: [`after_rapier`].
@@ -1075,6 +1085,19 @@ pub fn step_cables(
     inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
     each: &dyn ForEachCable,
 ) -> Vec<(usize, f64, CableError)> {
+    // The dynamic bodies a joint holds and no cable does: moving obstacles
+    // for the ropes (`Contacts::jointed`). Solved as the island's free
+    // bodies, rapier's joint and contacts were not in the island's solve
+    // and rapier's pose then stood: a rope let go on a hinged plank lying
+    // on the ground was thrown 63 m up (2026-11-27).
+    let held: Vec<rp::RigidBodyHandle> =
+        cables.iter().flat_map(|c| c.all_roles().map(|(b, _)| *b).chain(c.carried.iter().map(|k| k.body)).chain(c.followers.iter().map(|f| f.body))).collect();
+    let jointed: Vec<rp::RigidBodyHandle> = bodies
+        .iter()
+        .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h) && joints.attached_joints(*h).next().is_some())
+        .map(|(h, _)| h)
+        .collect();
+    let contacts = Contacts { jointed: &jointed, ..contacts };
     // 1. Sample every follower before any cable moves a body.
     for cc in cables.iter_mut().filter(|c| !c.failed) {
         let t = cc.cable.time();
@@ -1234,7 +1257,7 @@ pub fn step_cables(
     }
     // Ropes of different cables that touch: such cables form an island,
     // stepped as one system (`advance_island`).
-    let free = free_bodies(cables, bodies, &owns, contacts.colliders);
+    let free = free_bodies(cables, bodies, &owns, &contacts);
     let islands = cable_islands(cables, &free, bodies, contacts.colliders, joints, h);
     let mut alone = vec![true; cables.len()];
     for island in &islands {
@@ -1292,6 +1315,21 @@ pub fn step_cables(
         }
     }
     // 3. Hand the carried bodies to rapier; explicit reactions.
+    // The ropes' contact forces on the jointed bodies, as impulses.
+    for &handle in &jointed {
+        let Some(rb) = bodies.get_mut(handle) else {
+            continue;
+        };
+        let com = rb.center_of_mass().as_dvec3();
+        let (force, moment) = cables.iter().filter(|c| !c.failed).fold((DVec3::ZERO, DVec3::ZERO), |(f, m), c| {
+            let (df, dm) = c.obstacle_wrench(handle, com);
+            (f + df, m + dm)
+        });
+        if force != DVec3::ZERO || moment != DVec3::ZERO {
+            rb.apply_impulse((force * h).as_vec3(), true);
+            rb.apply_torque_impulse((moment * h).as_vec3(), true);
+        }
+    }
     for cc in cables.iter_mut().filter(|c| !c.failed) {
         for k in 0..cc.carried.len() {
             let (p1, r1, _, _) = cc.carried_state(&cc.carried[k]);
@@ -1372,14 +1410,16 @@ struct Island {
 }
 
 /// The dynamic rapier bodies no cable holds (not a cable's end, carried
-/// body, follower or rail), with colliders, that may touch a rope: each
-/// with a bound on its surface's speed (m/s).
+/// body, follower or rail) and no joint holds ([`Contacts::jointed`]:
+/// obstacles), with colliders, that may touch a rope: each with a bound
+/// on its surface's speed (m/s).
 fn free_bodies(
     cables: &[&mut CoupledCable],
     bodies: &rp::RigidBodySet,
     owns: &[Vec<rp::RigidBodyHandle>],
-    colliders: &rp::ColliderSet,
+    contacts: &Contacts<'_>,
 ) -> Vec<(rp::RigidBodyHandle, f64)> {
+    let colliders = contacts.colliders;
     if cables.iter().all(|c| c.failed || c.contact.is_none()) {
         return Vec::new();
     }
@@ -1393,7 +1433,7 @@ fn free_bodies(
         .collect();
     let mut free: Vec<(rp::RigidBodyHandle, f64)> = bodies
         .iter()
-        .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h))
+        .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h) && !contacts.jointed.contains(h))
         .filter(|(_, rb)| rb.colliders().iter().any(|c| colliders.get(*c).is_some_and(|c| !c.is_sensor())))
         .map(|(h, rb)| (h, rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * contact::body_extent(rb, colliders)))
         .collect();
