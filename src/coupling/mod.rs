@@ -1089,9 +1089,8 @@ pub fn step_cables(
     // for the ropes (`Contacts::jointed`). Solved as the island's free
     // bodies, rapier's joint and contacts were not in the island's solve
     // and rapier's pose then stood: a rope let go on a hinged plank lying
-    // on the ground was thrown 63 m up (2026-11-27).
-    let held: Vec<rp::RigidBodyHandle> =
-        cables.iter().flat_map(|c| c.all_roles().map(|(b, _)| *b).chain(c.carried.iter().map(|k| k.body)).chain(c.followers.iter().map(|f| f.body))).collect();
+    // on the ground was thrown 9.7 m up (2026-11-27).
+    let held = held_by_cables(cables);
     let jointed: Vec<rp::RigidBodyHandle> = bodies
         .iter()
         .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h) && joints.attached_joints(*h).next().is_some())
@@ -1409,6 +1408,12 @@ struct Island {
     passes: u32,
 }
 
+/// The bodies the cables hold: their ends' bodies, carried bodies and
+/// followers.
+fn held_by_cables(cables: &[&mut CoupledCable]) -> Vec<rp::RigidBodyHandle> {
+    cables.iter().flat_map(|c| c.all_roles().map(|(b, _)| *b).chain(c.carried.iter().map(|k| k.body)).chain(c.followers.iter().map(|f| f.body))).collect()
+}
+
 /// The dynamic rapier bodies no cable holds (not a cable's end, carried
 /// body, follower or rail) and no joint holds ([`Contacts::jointed`]:
 /// obstacles), with colliders, that may touch a rope: each with a bound
@@ -1423,14 +1428,8 @@ fn free_bodies(
     if cables.iter().all(|c| c.failed || c.contact.is_none()) {
         return Vec::new();
     }
-    let held: Vec<rp::RigidBodyHandle> = owns
-        .iter()
-        .flatten()
-        .copied()
-        .chain(cables.iter().flat_map(|c| c.all_roles().map(|(b, _)| *b)))
-        .chain(cables.iter().flat_map(|c| c.carried.iter().map(|k| k.body)))
-        .chain(cables.iter().flat_map(|c| c.followers.iter().map(|f| f.body)))
-        .collect();
+    let mut held = held_by_cables(cables);
+    held.extend(owns.iter().flatten().copied());
     let mut free: Vec<(rp::RigidBodyHandle, f64)> = bodies
         .iter()
         .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h) && !contacts.jointed.contains(h))
