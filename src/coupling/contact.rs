@@ -306,8 +306,8 @@ impl FrictionMemory {
     }
 
     /// How far (m) a body touch point's contact at `site`, starting
-    /// `depth` m inside its obstacle, has its obstacle's surface moved in
-    /// this step: the depth the body did not reach in the cable's or the
+    /// `depth` m inside its obstacle (a fixed one), has its obstacle's
+    /// surface moved in this step: the depth the body did not reach in the cable's or the
     /// island's own solve. A body rapier put into a collider (laid there,
     /// or pushed in, beyond [`SUNK_TOLERANCE`]) does not have that overlap
     /// as elastic energy of the contact's stiff law: its touch points
@@ -815,7 +815,13 @@ impl BodyTouch {
                     }
                     let site = Site::Body { collider: *own, point, obstacle: obstacle.handle };
                     let mut contact = obstacle.contact(hit, *radius, law);
-                    let offset = memory.sunk(site, radius - hit.2);
+                    // (Only against a fixed collider: a moving one's
+                    // plane, moved on at its velocity over the step, misses
+                    // its acceleration, and an offset would take that in
+                    // as well: a body on an accelerating platform would
+                    // sink into it.)
+                    let fixed = obstacle.body.is_none_or(|b| b.is_fixed());
+                    let offset = if fixed { memory.sunk(site, radius - hit.2) } else { 0.0 };
                     contact.point -= contact.normal * offset;
                     let element = memory.note_sunk(site, contact, mu, 0.0, [co.parent(), Some(self.body)], offset);
                     hits.push(AttachedForce { link: self.link, local_point: self.place.0 + self.place.1 * *q, element: Arc::new(element) });
