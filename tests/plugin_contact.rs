@@ -202,16 +202,7 @@ fn a_box_on_the_ground_under_a_rope_stays_on_the_ground() {
     let block = w
         .spawn((RigidBody::Dynamic, Collider::cuboid(0.4, 0.1, 0.4), ColliderMassProperties::Mass(20.0), Velocity::zero(), Transform::from_xyz(0.0, 0.1, 0.0)))
         .id();
-    let rope = w
-        .spawn(
-            CableDescriptor::new(3.0)
-                .material(RopeMaterial::steel_6x36_iwrc(0.02))
-                .segments(30)
-                .damping(0.05)
-                .start(CableAnchor::Free)
-                .path([Vec3::new(-1.5, 0.215, 0.0), Vec3::new(1.5, 0.215, 0.0)]),
-        )
-        .id();
+    let rope = w.spawn(free_rope_laid_level(0.215, 0.0).damping(0.05)).id();
     let (mut low, mut high, mut errors) = (f32::INFINITY, f32::NEG_INFINITY, Vec::new());
     let mut top = f32::NEG_INFINITY;
     for _ in 0..240 {
@@ -555,16 +546,7 @@ fn a_rope_let_go_on_a_hinged_plank_rests_on_it() {
             plank.insert(ImpulseJoint::new(ground, hinge));
         }
         let plank = plank.id();
-        let rope = w
-            .spawn(
-                CableDescriptor::new(3.0)
-                    .material(RopeMaterial::steel_6x36_iwrc(0.016))
-                    .segments(30)
-                    .damping(0.05)
-                    .start(CableAnchor::Free)
-                    .path([Vec3::new(-1.5, 0.2, 0.0), Vec3::new(1.5, 0.2, 0.0)]),
-            )
-            .id();
+        let rope = w.spawn(free_rope_laid_level(0.2, 0.0).material(RopeMaterial::steel_6x36_iwrc(0.016)).damping(0.05)).id();
         let mut errors: Vec<String> = run_frames(&mut app, 120).iter().map(|e| e.to_string()).collect();
         let mut force = 0.0f32;
         for _ in 0..60 {

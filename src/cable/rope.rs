@@ -479,7 +479,7 @@ impl RopeBuilder {
         // held end (its start if both are free) and ends where its length
         // does.
         let free_end = matches!(self.end, RopeEnd::Free);
-        let path = if (free_start || free_end) && !self.stress_free_shape { along_for(&path, self.length, free_start && !free_end)? } else { path };
+        let path = if (free_start || free_end) && !self.stress_free_shape { along_for(&path, self.length, free_start && !free_end) } else { path };
         let nodes = resample(&path, n)?;
         // (A free start is where the rope now begins.)
         let start = if free_start { nodes[0] } else { start };
@@ -694,13 +694,12 @@ impl RopeBuilder {
     }
 }
 
-/// Resamples a polyline at `n + 1` points equally spaced in arc length.
 /// `path` cut where it reaches `length` (m) along it from its first
 /// point (or from its last, `from_end`); `path` itself if it is no longer.
-fn along_for(path: &[DVec3], length: f64, from_end: bool) -> Result<Vec<DVec3>, RopeError> {
+fn along_for(path: &[DVec3], length: f64, from_end: bool) -> Vec<DVec3> {
     if path.len() < 2 || path.iter().any(|p| !p.is_finite()) {
         // (`resample` names the fault.)
-        return Ok(path.to_vec());
+        return path.to_vec();
     }
     let mut points: Vec<DVec3> = path.to_vec();
     if from_end {
@@ -717,14 +716,15 @@ fn along_for(path: &[DVec3], length: f64, from_end: bool) -> Result<Vec<DVec3>, 
             if from_end {
                 cut.reverse();
             }
-            return Ok(cut);
+            return cut;
         }
         left -= d;
         cut.push(w[1]);
     }
-    Ok(path.to_vec())
+    path.to_vec()
 }
 
+/// Resamples a polyline at `n + 1` points equally spaced in arc length.
 fn resample(path: &[DVec3], n: usize) -> Result<Vec<DVec3>, RopeError> {
     if path.len() < 2 {
         return Err(RopeError::InvalidPath("needs at least 2 points".into()));

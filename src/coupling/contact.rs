@@ -852,12 +852,12 @@ pub(crate) const GROUNDED_DEPTH: f64 = 1e-3;
 /// than the rounding of a pose to rapier's f32 (about 1e-7 m).
 pub(crate) const SUNK_TOLERANCE: f64 = 1e-6;
 
-/// Where a free body of an island (the rapier body `handle` with its
-/// frame at `origin`, turned by `rotation`) may start its step with its
+/// Where a free body new to an island (the rapier body `handle` with its
+/// frame at `origin`, turned by `rotation`) starts its step with its
 /// contacts with fixed and kinematic colliders solved in the island: moved
-/// out of those it sinks into (when `move_out`), along the deepest touch
-/// point's normal, a few times over, while the deepest is no deeper than
-/// [`GROUNDED_DEPTH`]; `None` only if rapier no longer has the body.
+/// out of those it sinks into, along the deepest touch point's normal, a
+/// few times over, while the deepest is no deeper than
+/// [`GROUNDED_DEPTH`] (`origin` itself if rapier no longer has the body).
 /// Rapier's resting contact lets a box on the ground sink about 70 µm (its
 /// allowed error); the island's steel contact law, met at that depth,
 /// threw a 20 kg box 6 mm up when it joined a rope's step (a rope let go
@@ -875,9 +875,10 @@ pub(crate) fn out_of_obstacles(
     world: &Contacts<'_>,
     bodies: &rp::RigidBodySet,
     now: f64,
-    move_out: bool,
-) -> Option<DVec3> {
-    let rb = bodies.get(handle)?;
+) -> DVec3 {
+    let Some(rb) = bodies.get(handle) else {
+        return origin;
+    };
     let obstacles = Obstacle::all(world, bodies, &[handle], now, now);
     let points: Vec<(DVec3, f64)> =
         rb.colliders().iter().filter_map(|c| world.colliders.get(*c)).filter(|c| !c.is_sensor()).flat_map(placed_touch_points).collect();
@@ -900,11 +901,11 @@ pub(crate) fn out_of_obstacles(
             }
         }
         match deepest {
-            Some((depth, normal)) if move_out && depth <= GROUNDED_DEPTH => origin += normal * depth,
+            Some((depth, normal)) if depth <= GROUNDED_DEPTH => origin += normal * depth,
             _ => break,
         }
     }
-    Some(origin)
+    origin
 }
 
 /// Adds this pass's contacts of a free body of an island (the rapier body

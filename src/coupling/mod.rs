@@ -1090,12 +1090,17 @@ pub fn step_cables(
     // bodies, rapier's joint and contacts were not in the island's solve
     // and rapier's pose then stood: a rope let go on a hinged plank lying
     // on the ground was thrown 9.7 m up (2026-11-27).
-    let held = held_by_cables(cables);
-    let jointed: Vec<rp::RigidBodyHandle> = bodies
-        .iter()
-        .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h) && joints.attached_joints(*h).next().is_some())
-        .map(|(h, _)| h)
-        .collect();
+    // (None without contacts.)
+    let jointed: Vec<rp::RigidBodyHandle> = if any_contacts(cables) {
+        let held = held_by_cables(cables);
+        bodies
+            .iter()
+            .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h) && joints.attached_joints(*h).next().is_some())
+            .map(|(h, _)| h)
+            .collect()
+    } else {
+        Vec::new()
+    };
     let contacts = Contacts { jointed: &jointed, ..contacts };
     // 1. Sample every follower before any cable moves a body.
     for cc in cables.iter_mut().filter(|c| !c.failed) {
@@ -1257,7 +1262,7 @@ pub fn step_cables(
     // Ropes of different cables that touch: such cables form an island,
     // stepped as one system (`advance_island`).
     let free = free_bodies(cables, bodies, &owns, &contacts);
-    let islands = cable_islands(cables, &free, bodies, contacts.colliders, joints, h);
+    let islands = cable_islands(cables, &free, bodies, contacts.colliders, h);
     let mut alone = vec![true; cables.len()];
     for island in &islands {
         island.members.iter().for_each(|&i| alone[i] = false);
@@ -1402,10 +1407,15 @@ fn find_contacts(
 struct Island {
     members: Vec<usize>,
     /// Each body, and whether the island can solve its contacts with
-    /// fixed and kinematic colliders ([`contact::touches_are_solved`], and
-    /// no joint on it).
+    /// fixed and kinematic colliders ([`contact::touches_are_solved`]; no
+    /// joint holds a free body, [`Contacts::jointed`]).
     bodies: Vec<(rp::RigidBodyHandle, bool)>,
     passes: u32,
+}
+
+/// Whether a cable that has not failed has its contacts on.
+fn any_contacts(cables: &[&mut CoupledCable]) -> bool {
+    cables.iter().any(|c| !c.failed && c.contact.is_some())
 }
 
 /// The bodies the cables hold: their ends' bodies, carried bodies and
@@ -1425,7 +1435,7 @@ fn free_bodies(
     contacts: &Contacts<'_>,
 ) -> Vec<(rp::RigidBodyHandle, f64)> {
     let colliders = contacts.colliders;
-    if cables.iter().all(|c| c.failed || c.contact.is_none()) {
+    if !any_contacts(cables) {
         return Vec::new();
     }
     let mut held = held_by_cables(cables);
@@ -1451,7 +1461,6 @@ fn cable_islands(
     free: &[(rp::RigidBodyHandle, f64)],
     bodies: &rp::RigidBodySet,
     colliders: &rp::ColliderSet,
-    joints: &rp::ImpulseJointSet,
     h: f64,
 ) -> Vec<Island> {
     let candidates: Vec<usize> = (0..cables.len()).filter(|&i| !cables[i].failed && cables[i].contact.is_some()).collect();
@@ -1513,11 +1522,11 @@ fn cable_islands(
             island.members.push(candidates[k]);
         } else {
             // Whether the island can solve its contacts with fixed and
-            // kinematic colliders too: no joint holds it, and all its
-            // colliders have touch points (asked of the island's bodies
-            // only, not of every dynamic body at every step).
+            // kinematic colliders too: all its colliders have touch points
+            // (asked of the island's bodies only, not of every dynamic body
+            // at every step; a jointed body is an obstacle, not a free one).
             let handle = free[k - candidates.len()].0;
-            let solvable = joints.attached_joints(handle).next().is_none() && bodies.get(handle).is_some_and(|rb| contact::touches_are_solved(rb, colliders));
+            let solvable = bodies.get(handle).is_some_and(|rb| contact::touches_are_solved(rb, colliders));
             island.bodies.push((handle, solvable));
         }
         island.passes = island.passes.max(contact_passes(approach[k], h));
@@ -1626,12 +1635,11 @@ fn advance_island(
         // preload the move would take away: a box sliding down a slope
         // under a rope then started every step with no normal force and
         // no friction, and slid 7 % faster than Coulomb's rate.) One sunk
-        // deeper is left to rapier's contacts this step.
-        let mut grounded = false;
-        if solvable {
-            if let Some(out) = contact::out_of_obstacles(handle, (origin, rotation), contacts, bodies, start, memory.is_none()) {
-                (origin, grounded) = (out, true);
-            }
+        // deeper stays where it is, its contacts offset
+        // (`FrictionMemory::sunk`).
+        let grounded = solvable;
+        if solvable && memory.is_none() {
+            origin = contact::out_of_obstacles(handle, (origin, rotation), contacts, bodies, start);
         }
         starts.push(BodyPass { handle, grounded, origin, rotation, velocity, angular_velocity });
         memories.push(memory.unwrap_or_default());
