@@ -210,11 +210,17 @@ fn predicted_configuration_form_diverges_on_the_stiff_rope() {
 
 /// What the preset does not cover (docs/architecture.md, "Fast preset"): a
 /// rope laid slack between two pins (12 m of 20 mm steel, 48 elements,
-/// pins 10 m apart, laid as a V) is one it cannot step. It must stop with
-/// an error that names the element and the time, leaving the last good
-/// state (finite, at that time); the default scheme runs the same rope.
-/// If this starts passing without an error, the preset has learnt slack
-/// ropes: update the docs.
+/// pins 10 m apart, laid as a V, damped 2 /s). Its steps whose
+/// linearisation crosses a kink (an element pulled taut or let go) are
+/// taken by the default scheme, so the whip of the first second runs (it
+/// stopped at the first step, "element 0 strained by −362.8 %", before
+/// that fallback): 87 of its first 88 steps are the default's. It stops
+/// at 1.47 s ("Newton did not converge" at 256 sub-steps, from the state
+/// its one linearised step left; with the preset rope section of
+/// `tests/slack.rs` the kinetic energy jumps from 0.26 J to 590 J in such
+/// a step at 1.8 s), with an error that names the time, leaving the last
+/// good state; the default scheme runs the same rope. If this starts passing without an error, the preset has
+/// learnt slack ropes: update the docs.
 #[test]
 fn fast_preset_stops_with_a_clear_error_on_a_rope_slack_between_two_pins() {
     let section = RopeSection { linear_density: MU, ea: EA, ei: 50.0, ei2: 50.0, gj: 35.0, min_breaking_load: 0.0 };
@@ -232,7 +238,7 @@ fn fast_preset_stops_with_a_clear_error_on_a_rope_slack_between_two_pins() {
     let h = 1.0 / 60.0;
     let mut fast = Cable::new(build(), Scheme::LinearlyImplicit { w: 0.55 }).expect("cable");
     let mut failure = None;
-    for _ in 0..60 {
+    for _ in 0..720 {
         let t = fast.time();
         if let Err(e) = fast.step(h) {
             failure = Some((t, e.to_string()));
@@ -240,8 +246,11 @@ fn fast_preset_stops_with_a_clear_error_on_a_rope_slack_between_two_pins() {
         }
     }
     let (t, message) = failure.expect("the fast preset stepped a slack rope: update docs/architecture.md");
-    println!("fast preset on the slack V: {message}");
-    assert!(message.contains("element") && message.contains(&format!("t = {}", t + h)), "{message}");
+    let s = fast.total_stats;
+    println!("fast preset on the slack V: stopped at {t:.3} s: {message}; {} of {} steps taken by the default scheme", s.newton_fallbacks, fast.steps);
+    assert!(t >= 1.0, "the whip of the first second did not run: stopped at {t} s");
+    assert!(s.newton_fallbacks > 0);
+    assert!(message.contains(&format!("t = {}", t + h)) || message.contains(&format!("t = {t}")), "{message}");
     assert_eq!(fast.time(), t, "a failed step moved the time");
     assert!(fast.state.is_finite());
     let mut default = Cable::new(build(), Scheme::default()).expect("cable");

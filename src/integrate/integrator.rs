@@ -55,6 +55,11 @@ pub struct StepStats {
     /// after their Newton solve failed
     /// ([`SecondOrderSystem::set_definite_tangent`]).
     pub definite_retries: usize,
+    /// Steps of the fast preset ([`Scheme::LinearlyImplicit`]) whose single
+    /// linearised solve crossed a kink of a non-smooth law (a slack rope
+    /// element pulled taut) and were taken again by the default scheme
+    /// (generalized-α with Newton).
+    pub newton_fallbacks: usize,
 }
 
 impl AddAssign for StepStats {
@@ -66,6 +71,7 @@ impl AddAssign for StepStats {
         self.line_search_evals += o.line_search_evals;
         self.branch_updates += o.branch_updates;
         self.definite_retries += o.definite_retries;
+        self.newton_fallbacks += o.newton_fallbacks;
     }
 }
 
@@ -178,6 +184,9 @@ pub struct Integrator {
     /// is halved).
     split: u32,
     calm: u32,
+    /// The fast preset's current step is taken by the default scheme (its
+    /// linearised solve crossed a kink of a non-smooth law).
+    as_default: bool,
     ws: Workspace,
 }
 
@@ -197,6 +206,7 @@ impl Integrator {
             max_explicit_substeps: 1_000_000,
             split: 1,
             calm: 0,
+            as_default: false,
             ws: Workspace::default(),
         }
     }
@@ -262,6 +272,7 @@ impl Integrator {
             max_explicit_substeps: like.max_explicit_substeps,
             split,
             calm: if calm == u32::MAX { 0 } else { calm },
+            as_default: false,
             ws: Workspace::default(),
         }
     }
@@ -329,15 +340,33 @@ impl Integrator {
         n0: u32,
         stats: &mut StepStats,
     ) -> Result<(), IntegrateError> {
-        let t = state.t;
         let auto = matches!(self.substeps, Substeps::Auto);
         let max_n = n0.saturating_mul(self.newton.max_substeps.max(1));
         // Under `Auto` a step starts at the split the last one needed (a
         // slack rope's first whip needs fine steps for a while; retrying the
         // full step every frame would cost a failed solve each time).
-        let mut n = if auto { self.split.clamp(n0, max_n) } else { n0 };
-        let start_n = n;
+        let n = if auto { self.split.clamp(n0, max_n) } else { n0 };
         self.ws.branch_budget = MAX_BRANCH_UPDATES;
+        self.as_default = false;
+        let result = self.step_implicit_from(sys, state, h, n0, n, stats);
+        self.as_default = false;
+        result
+    }
+
+    /// The body of [`step_implicit`](Self::step_implicit) from split `n`.
+    fn step_implicit_from<S: SecondOrderSystem + ?Sized>(
+        &mut self,
+        sys: &mut S,
+        state: &mut State,
+        h: f64,
+        n0: u32,
+        mut n: u32,
+        stats: &mut StepStats,
+    ) -> Result<(), IntegrateError> {
+        let t = state.t;
+        let auto = matches!(self.substeps, Substeps::Auto);
+        let max_n = n0.saturating_mul(self.newton.max_substeps.max(1));
+        let start_n = n;
         loop {
             let before = stats.newton_iterations;
             match self.try_substeps(sys, state, h, n, stats) {
@@ -356,6 +385,15 @@ impl Integrator {
                 }
                 Err(failure) => {
                     self.ws.restore(state);
+                    if matches!(failure, Failure::Kink) {
+                        // The fast preset: the whole step again with the
+                        // default scheme, from its acceleration.
+                        stats.newton_fallbacks += 1;
+                        self.as_default = true;
+                        state.a_hat.copy_from_slice(&state.a);
+                        self.ws.a_prev_next_t = f64::NAN;
+                        continue;
+                    }
                     // A calm step whose first solve failed is tried again at
                     // the same split with the tangent's fallback for
                     // indefinite iterates (a stiff end spring whose target
@@ -390,6 +428,7 @@ impl Integrator {
                         return Err(match failure {
                             Failure::NotConverged { iterations } => IntegrateError::NotConverged { t, h, substeps: n, iterations },
                             Failure::Error(e) => e,
+                            Failure::Kink => IntegrateError::NotConverged { t, h, substeps: n, iterations: 1 },
                         });
                     }
                     n = next;
@@ -406,9 +445,10 @@ impl Integrator {
             state.t = t + h * f64::from(k) / f64::from(n);
             match self.scheme {
                 Scheme::WilsonTheta { theta } => step_wilson(sys, state, ws, theta, hs, newton, stats)?,
-                Scheme::LinearlyImplicit { w } => step_linearly_implicit(sys, state, ws, w, hs, newton, stats)?,
+                Scheme::LinearlyImplicit { w } if !self.as_default => step_linearly_implicit(sys, state, ws, w, hs, newton, stats)?,
                 ref s => {
-                    let p = s.alpha_parameters().expect("every other implicit scheme is generalized-α");
+                    let p = if self.as_default { Scheme::default().alpha_parameters() } else { s.alpha_parameters() };
+                    let p = p.expect("every other implicit scheme is generalized-α");
                     step_alpha(sys, state, ws, p, hs, newton, stats)?
                 }
             }

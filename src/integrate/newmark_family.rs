@@ -100,6 +100,9 @@ const DIRECTION_FRACTION: f64 = 1.0 / 64.0;
 ///   `tests/fast_preset.rs`).
 ///
 /// On a linear system both forms are the same θ-step (exact linearisation).
+/// A stiff-form pass whose result crosses a kink of a non-smooth law fails
+/// with [`Failure::Kink`]: the integrator takes the step again with the
+/// default scheme.
 pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     state: &mut State,
@@ -135,7 +138,11 @@ pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
 /// and the affine bases in `ws.qb`, `ws.vb`, solves
 /// `(M + c_v C + c_q K) δ = −r(t₁, q, v_p, a₀) − K d` at `(q, v_p, a₀)`,
 /// `K d` by a directional difference, and leaves `x = a₀ + δ` and the
-/// matching coordinates in `ws`.
+/// matching coordinates in `ws`. Fails with [`Failure::Kink`] when the
+/// result lies on another branch of a non-smooth law than the one
+/// linearised (beyond the tolerances of
+/// [`SecondOrderSystem::update_branches`]): one linear solve does not hold
+/// across a kink.
 fn linearised_at_start<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     state: &State,
@@ -157,10 +164,12 @@ fn linearised_at_start<S: SecondOrderSystem + ?Sized>(
     for i in 0..n {
         ws.q[i] = state.q[i] + eps * ws.dq_sum[i];
     }
-    let result = linear_solve_at(sys, state, ws, map, stats);
-    sys.release_branches();
-    result?;
+    if let Err(e) = linear_solve_at(sys, state, ws, map, stats) {
+        sys.release_branches();
+        return Err(e);
+    }
     if !ws.dx.iter().all(|x| x.is_finite()) {
+        sys.release_branches();
         return Err(IntegrateError::NonFinite { t }.into());
     }
     // The step's displacement from q, applied in the system's own way if it
@@ -175,7 +184,13 @@ fn linearised_at_start<S: SecondOrderSystem + ?Sized>(
         }
     }
     newton::update_coordinates(ws, c_q, c_v);
-    Ok(())
+    let same_branches = sys.update_branches(&ws.q, &ws.v) == 0;
+    sys.release_branches();
+    if same_branches {
+        Ok(())
+    } else {
+        Err(Failure::Kink)
+    }
 }
 
 /// The two residuals and the solve of [`linearised_at_start`] (branches

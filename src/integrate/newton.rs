@@ -53,6 +53,9 @@ pub(crate) enum Failure {
     NotConverged { iterations: usize },
     /// The system failed, or the state became non-finite.
     Error(IntegrateError),
+    /// The fast preset's single linearised solve crossed a kink of a
+    /// non-smooth law: the step is taken again by the default scheme.
+    Kink,
 }
 
 impl From<IntegrateError> for Failure {

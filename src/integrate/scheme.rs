@@ -85,11 +85,15 @@ pub enum Scheme {
     /// stretch and bending: `tests/fast_preset.rs`); on a linear system both
     /// are the same θ-step.
     ///
-    /// For taut ropes: a rope that goes slack, a rope pinned at both ends,
-    /// very heavy payloads and large steps need the default scheme (one
-    /// solve cannot move a slack element's branch or correct an end
-    /// anchor's lever error; measured in docs/architecture.md, "Fast
-    /// preset"). Such a step stops with an error naming the element.
+    /// For taut ropes. A step whose solve crosses a kink of a non-smooth
+    /// law (a slack element pulled taut) is taken again by the default
+    /// scheme ([`StepStats::newton_fallbacks`]). A rope slack between two
+    /// pins, very heavy payloads and large steps still need the default
+    /// scheme (one solve cannot tell a poor linearisation, nor correct an
+    /// end anchor's lever error; measured in docs/architecture.md, "Fast
+    /// preset"). Such a step stops with an error naming the time.
+    ///
+    /// [`StepStats::newton_fallbacks`]: super::StepStats::newton_fallbacks
     ///
     /// [`SecondOrderSystem::max_frequency`]: super::SecondOrderSystem::max_frequency
     LinearlyImplicit {
