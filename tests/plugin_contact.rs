@@ -621,3 +621,54 @@ fn a_damped_box_carrying_a_rope_slows_at_the_damped_rate() {
     assert!(creep < 1e-3, "the rope should ride on the box: it moved {creep} m on it");
     assert!((ratio / expected - 1.0).abs() < 5e-3, "box and rope should slow at M c / (M + m): ratio {ratio}, closed form {expected}");
 }
+
+/// A 20 kg box (0.8 × 0.2 × 0.8 m) carrying a free 3 m steel rope laid
+/// across its top, on a position-based kinematic platform that the user
+/// moves along x at a = 2 m/s² (its `Transform` set to a t²/2 every frame),
+/// 2 s at 1/60 s. Friction (0.5) holds the box: it needs a/g = 0.2. The box
+/// rides with the platform (within 2 cm of its place on it after 4 m; rapier
+/// alone, without the rope, keeps it within 0.6 cm, and the island's stick
+/// springs let it creep about 1.5 cm, as on a velocity-based platform), on
+/// its top (within 1 mm), and the rope stays on the box. Before
+/// (2026-11-27) the platform was met at the velocity rapier had given it
+/// at its last step (rapier derives a position-based body's velocity from
+/// its target only at its own step, after the cables'), a h = 3.3 cm/s
+/// too slow: the box slid back 8.0 cm.
+#[test]
+fn a_box_carrying_a_rope_rides_an_accelerating_position_based_platform() {
+    let (a, h) = (2.0f32, 1.0f32 / 60.0);
+    let mut app = plugin_app::headless_app(h);
+    let w = app.world_mut();
+    let platform = w.spawn((RigidBody::KinematicPositionBased, Transform::from_xyz(0.0, -0.1, 0.0), Collider::cuboid(3.0, 0.1, 3.0))).id();
+    let block = w
+        .spawn((RigidBody::Dynamic, Collider::cuboid(0.4, 0.1, 0.4), ColliderMassProperties::Mass(20.0), Velocity::zero(), Transform::from_xyz(0.0, 0.1, 0.0)))
+        .id();
+    let rope = w
+        .spawn(
+            CableDescriptor::new(3.0)
+                .material(RopeMaterial::steel_6x36_iwrc(0.02))
+                .segments(30)
+                .friction(0.5)
+                .start(CableAnchor::Free)
+                .path([Vec3::new(0.0, 0.215, -1.5), Vec3::new(0.0, 0.215, 1.5)]),
+        )
+        .id();
+    let (mut errors, mut slid, mut off_top, mut top) = (Vec::new(), 0.0f32, 0.0f32, f32::NEG_INFINITY);
+    for k in 1..=120 {
+        let t = k as f32 * h;
+        app.world_mut().get_mut::<Transform>(platform).unwrap().translation.x = 0.5 * a * t * t;
+        errors.extend(run_frames(&mut app, 1).iter().map(|e| e.to_string()));
+        let p = app.world().get::<Transform>(block).unwrap().translation;
+        let x = app.world().get::<Transform>(platform).unwrap().translation.x;
+        slid = slid.max((p.x - x).abs());
+        off_top = off_top.max((p.y - 0.1).abs());
+        if let Some(s) = app.world().get::<CableState>(rope) {
+            top = s.nodes.iter().map(|n| n.y).fold(top, f32::max);
+        }
+    }
+    println!("box slid {slid:.4} m on the platform, {off_top:.1e} m off its top; the rope's highest node {top:.4} m; errors {errors:?}");
+    assert!(errors.is_empty(), "{errors:?}");
+    assert!(slid < 0.02, "the box should ride with the platform: slid {slid} m");
+    assert!(off_top < 1e-3, "the box should stay on the platform: {off_top} m off");
+    assert!(top < 0.25, "the rope should stay on the box: highest node {top} m");
+}

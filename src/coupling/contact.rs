@@ -371,6 +371,22 @@ pub struct Contacts<'a> {
     /// as impulses ([`crate::coupling::step_cables`] fills it; adapters
     /// pass `&[]`).
     pub jointed: &'a [rp::RigidBodyHandle],
+    /// The position-based kinematic bodies' velocities over the step (of
+    /// the centre of mass, m/s, and angular, rad/s): from their pose to the
+    /// target the user set (rapier's `next_position`). Rapier gives them
+    /// those velocities only at its own step, after the cables'; until then
+    /// they read the last step's ([`crate::coupling::step_cables`] fills
+    /// it; adapters pass `&[]`).
+    pub kinematic: &'a [(rp::RigidBodyHandle, DVec3, DVec3)],
+}
+
+impl Contacts<'_> {
+    /// A body's velocities over the step (of its centre of mass, m/s, and
+    /// angular, rad/s): [`Contacts::kinematic`]'s for a position-based
+    /// kinematic body, else rapier's.
+    pub(crate) fn velocities(&self, handle: rp::RigidBodyHandle, rb: &rp::RigidBody) -> (DVec3, DVec3) {
+        self.kinematic.iter().find(|k| k.0 == handle).map_or((rb.linvel().as_dvec3(), rb.angvel().as_dvec3()), |k| (k.1, k.2))
+    }
 }
 
 /// A collider's pose relative to its body (identity without a body).
@@ -388,6 +404,9 @@ struct Obstacle<'a> {
     rotation: DMat3,
     exact: Option<BaseState>,
     body: Option<&'a rp::RigidBody>,
+    /// Without an exact motion, its body's centre of mass at `now` (m) and
+    /// velocities over the step ([`Contacts::velocities`]: m/s, rad/s).
+    moving: Option<(DVec3, DVec3, DVec3)>,
     /// The time the obstacle is taken at, s (a contact pass's start).
     now: f64,
     /// Its bounding box then, world, m ([`Obstacle::aabb`]).
@@ -403,6 +422,14 @@ impl<'a> Obstacle<'a> {
     fn new(handle: rp::ColliderHandle, collider: &'a rp::Collider, world: &Contacts<'_>, bodies: &'a rp::RigidBodySet, now: f64, start: f64) -> Self {
         let body = collider.parent().and_then(|p| bodies.get(p));
         let exact = collider.parent().and_then(|p| (world.motions)(p)).map(|m| m(now));
+        let dt = now - start;
+        let moving = match (&exact, body, collider.parent()) {
+            (None, Some(rb), Some(p)) => {
+                let (v, w) = world.velocities(p, rb);
+                Some((rb.center_of_mass().as_dvec3() + v * dt.max(0.0), v, w))
+            }
+            _ => None,
+        };
         let (origin, rotation) = match &exact {
             Some(b) => {
                 let (lt, lr) = offset(collider);
@@ -411,11 +438,10 @@ impl<'a> Obstacle<'a> {
             None => {
                 let pose = collider.position();
                 let (mut origin, mut rotation) = (pose.translation.as_dvec3(), DMat3::from_quat(pose.rotation.as_dquat().normalize()));
-                let dt = now - start;
-                if let (Some(rb), true) = (body, dt > 0.0) {
-                    let (com, w) = (rb.center_of_mass().as_dvec3(), rb.angvel().as_dvec3());
+                if let (Some(rb), Some((_, v, w)), true) = (body, moving, dt > 0.0) {
+                    let com = rb.center_of_mass().as_dvec3();
                     let turn = DMat3::from_quat(glam::DQuat::from_scaled_axis(w * dt));
-                    origin = com + turn * (origin - com) + rb.linvel().as_dvec3() * dt;
+                    origin = com + turn * (origin - com) + v * dt;
                     rotation = turn * rotation;
                 }
                 (origin, rotation)
@@ -429,12 +455,12 @@ impl<'a> Obstacle<'a> {
         };
         let (lo, hi) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
         let corner = |c: DVec3| (c - lo).abs().max((c - hi).abs()).length();
-        let speed = match (&exact, body) {
+        let speed = match (&exact, moving) {
             (Some(b), _) => b.velocity.length() + b.angular_velocity.length() * corner(b.position),
-            (None, Some(rb)) => rb.linvel().as_dvec3().length() + rb.angvel().as_dvec3().length() * corner(rb.center_of_mass().as_dvec3()),
+            (None, Some((com, v, w))) => v.length() + w.length() * corner(com),
             (None, None) => 0.0,
         };
-        Obstacle { handle, collider, origin, rotation, exact, body, now, bounds: (lo, hi), speed }
+        Obstacle { handle, collider, origin, rotation, exact, body, moving, now, bounds: (lo, hi), speed }
     }
 
     /// Every collider a rope or a carried body may touch this step, at
@@ -502,9 +528,9 @@ impl<'a> Obstacle<'a> {
 
     /// Velocity of the obstacle's surface at world point `q`, m/s.
     fn surface_velocity(&self, q: DVec3) -> DVec3 {
-        match (&self.exact, self.body) {
+        match (&self.exact, self.moving) {
             (Some(b), _) => b.velocity + b.angular_velocity.cross(q - b.position),
-            (None, Some(rb)) => rb.velocity_at_point(q.as_vec3()).as_dvec3(),
+            (None, Some((com, v, w))) => v + w.cross(q - com),
             (None, None) => DVec3::ZERO,
         }
     }

@@ -626,6 +626,20 @@ fn lumped_of(rb: &rp::RigidBody) -> LumpedBody {
     }
 }
 
+/// The velocities (of the centre of mass, m/s, and angular, rad/s) that
+/// move a body from its pose to its `next_position` in `h` s: what rapier
+/// gives a position-based kinematic body at its step
+/// (`RigidBodyPosition::interpolate_velocity`), in f64.
+fn velocities_to_target(rb: &rp::RigidBody, h: f64) -> (DVec3, DVec3) {
+    let (pose, next) = (rb.position(), rb.next_position());
+    let com = rb.local_center_of_mass().as_dvec3();
+    let (r0, r1) = (pose.rotation.as_dquat().normalize(), next.rotation.as_dquat().normalize());
+    let (c0, c1) = (pose.translation.as_dvec3() + r0 * com, next.translation.as_dvec3() + r1 * com);
+    let turn = r1 * r0.conjugate();
+    let turn = if turn.w < 0.0 { -turn } else { turn };
+    ((c1 - c0) / h, turn.to_scaled_axis() / h)
+}
+
 /// Sample of the point `anchor` (body frame) of a rapier body.
 fn sample_body(rb: &rp::RigidBody, anchor: DVec3) -> BodySample {
     let (p, r) = pose_of(rb);
@@ -731,7 +745,7 @@ impl Coupling {
         motions: &dyn Fn(rp::RigidBodyHandle) -> Option<BodyMotion>,
     ) -> Vec<(usize, f64, CableError)> {
         let mut all: Vec<&mut CoupledCable> = self.cables.iter_mut().collect();
-        step_cables(&mut all, bodies, Contacts { colliders, motions, jointed: &[] }, joints, h, substeps, inputs, &OneByOne)
+        step_cables(&mut all, bodies, Contacts { colliders, motions, jointed: &[], kinematic: &[] }, joints, h, substeps, inputs, &OneByOne)
     }
 
     /// Phase 2 over every cable: [`after_rapier`].
@@ -1101,7 +1115,26 @@ pub fn step_cables(
     } else {
         Vec::new()
     };
-    let contacts = Contacts { jointed: &jointed, ..contacts };
+    // A position-based kinematic body moves over the step to the target
+    // the user set; rapier gives it the velocities that do so only at its
+    // own step, after this one, so until then it reads the last step's
+    // (`Contacts::kinematic`). Met at those, a platform accelerating at
+    // 2 m/s² carried a box (and the rope on it) a h slower each step: it
+    // slid 8 cm back in 2 s (2026-11-27).
+    // (None without contacts.)
+    let kinematic: Vec<(rp::RigidBodyHandle, DVec3, DVec3)> = if any_contacts(cables) {
+        bodies
+            .iter()
+            .filter(|(_, rb)| rb.body_type() == rp::RigidBodyType::KinematicPositionBased)
+            .map(|(handle, rb)| {
+                let (v, w) = velocities_to_target(rb, h);
+                (handle, v, w)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let contacts = Contacts { jointed: &jointed, kinematic: &kinematic, ..contacts };
     // 1. Sample every follower before any cable moves a body.
     for cc in cables.iter_mut().filter(|c| !c.failed) {
         let t = cc.cable.time();

@@ -380,7 +380,7 @@ pub(crate) fn step_cables(
     let failures = coupling::step_cables(
         &mut refs,
         &mut ctx.rigidbody_set.bodies,
-        Contacts { colliders: &ctx.colliders.colliders, motions: &|b| motions.get(&b).cloned(), jointed: &[] },
+        Contacts { colliders: &ctx.colliders.colliders, motions: &|b| motions.get(&b).cloned(), jointed: &[], kinematic: &[] },
         &mut ctx.joints.impulse_joints,
         dt,
         settings.substeps,
