@@ -1105,7 +1105,8 @@ pub fn step_cables(
     // and rapier's pose then stood: a rope let go on a hinged plank lying
     // on the ground was thrown 9.7 m up (2026-11-27).
     // (None without contacts.)
-    let jointed: Vec<rp::RigidBodyHandle> = if any_contacts(cables) {
+    let touching = any_contacts(cables);
+    let jointed: Vec<rp::RigidBodyHandle> = if touching {
         let held = held_by_cables(cables);
         bodies
             .iter()
@@ -1122,7 +1123,7 @@ pub fn step_cables(
     // 2 m/s² carried a box (and the rope on it) a h slower each step: it
     // slid 8 cm back in 2 s (2026-11-27).
     // (None without contacts.)
-    let kinematic: Vec<(rp::RigidBodyHandle, DVec3, DVec3)> = if any_contacts(cables) {
+    let kinematic: Vec<(rp::RigidBodyHandle, DVec3, DVec3)> = if touching {
         bodies
             .iter()
             .filter(|(_, rb)| rb.body_type() == rp::RigidBodyType::KinematicPositionBased)

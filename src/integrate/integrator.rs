@@ -340,32 +340,30 @@ impl Integrator {
         n0: u32,
         stats: &mut StepStats,
     ) -> Result<(), IntegrateError> {
-        let auto = matches!(self.substeps, Substeps::Auto);
-        let max_n = n0.saturating_mul(self.newton.max_substeps.max(1));
-        // Under `Auto` a step starts at the split the last one needed (a
-        // slack rope's first whip needs fine steps for a while; retrying the
-        // full step every frame would cost a failed solve each time).
-        let n = if auto { self.split.clamp(n0, max_n) } else { n0 };
         self.ws.branch_budget = MAX_BRANCH_UPDATES;
         self.as_default = false;
-        let result = self.step_implicit_from(sys, state, h, n0, n, stats);
+        let result = self.step_implicit_splits(sys, state, h, n0, stats);
         self.as_default = false;
         result
     }
 
-    /// The body of [`step_implicit`](Self::step_implicit) from split `n`.
-    fn step_implicit_from<S: SecondOrderSystem + ?Sized>(
+    /// The body of [`step_implicit`](Self::step_implicit): the step, split
+    /// further while it fails.
+    fn step_implicit_splits<S: SecondOrderSystem + ?Sized>(
         &mut self,
         sys: &mut S,
         state: &mut State,
         h: f64,
         n0: u32,
-        mut n: u32,
         stats: &mut StepStats,
     ) -> Result<(), IntegrateError> {
         let t = state.t;
         let auto = matches!(self.substeps, Substeps::Auto);
         let max_n = n0.saturating_mul(self.newton.max_substeps.max(1));
+        // Under `Auto` a step starts at the split the last one needed (a
+        // slack rope's first whip needs fine steps for a while; retrying the
+        // full step every frame would cost a failed solve each time).
+        let mut n = if auto { self.split.clamp(n0, max_n) } else { n0 };
         let start_n = n;
         loop {
             let before = stats.newton_iterations;
