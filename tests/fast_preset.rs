@@ -208,21 +208,20 @@ fn predicted_configuration_form_diverges_on_the_stiff_rope() {
     assert!(cable.time() < 1.0 && failure.contains("strained"), "{failure} at t = {}", cable.time());
 }
 
-/// What the preset does not cover (docs/architecture.md, "Fast preset"): a
-/// rope laid slack between two pins (12 m of 20 mm steel, 48 elements,
-/// pins 10 m apart, laid as a V, damped 2 /s). Its steps whose
-/// linearisation crosses a kink (an element pulled taut or let go) are
-/// taken by the default scheme, so the whip of the first second runs (it
-/// stopped at the first step, "element 0 strained by −362.8 %", before
-/// that fallback): 87 of its first 88 steps are the default's. It stops
-/// at 1.47 s ("Newton did not converge" at 256 sub-steps, from the state
-/// its one linearised step left; with the preset rope section of
-/// `tests/slack.rs` the kinetic energy jumps from 0.26 J to 590 J in such
-/// a step at 1.8 s), with an error that names the time, leaving the last
-/// good state; the default scheme runs the same rope. If this starts passing without an error, the preset has
-/// learnt slack ropes: update the docs.
+/// A rope laid slack between two pins (12 m of 20 mm steel, 48 elements,
+/// pins 10 m apart, laid as a V, damped 2 /s), 12 s at 1/60 s. The fast
+/// preset's steps that one solve cannot take (a kink crossed, an element
+/// pulled taut or let go, a correction or an end residual beyond its
+/// limits) are taken by the default scheme. Before the preset checked its
+/// steps it stopped at 1.47 s ("Newton did not converge", from a state its
+/// accepted linearised steps left). It now runs the 12 s, but it does not
+/// settle as the default scheme does: the few steps it keeps on this
+/// whipping rope (about 20 of 720) each raise the kinetic energy from
+/// under 1 J to a few joules, so the rope still moves at 12 s
+/// (docs/architecture.md, "Fast preset"). If this starts settling, update
+/// the docs.
 #[test]
-fn fast_preset_stops_with_a_clear_error_on_a_rope_slack_between_two_pins() {
+fn fast_preset_runs_a_rope_slack_between_two_pins_but_does_not_settle_it() {
     let section = RopeSection { linear_density: MU, ea: EA, ei: 50.0, ei2: 50.0, gj: 35.0, min_breaking_load: 0.0 };
     let b = DVec3::new(10.0, 0.0, 0.0);
     let v = vec![DVec3::ZERO, DVec3::new(5.0, -(36.0f64 - 25.0).sqrt(), 0.0), b];
@@ -237,24 +236,65 @@ fn fast_preset_stops_with_a_clear_error_on_a_rope_slack_between_two_pins() {
     };
     let h = 1.0 / 60.0;
     let mut fast = Cable::new(build(), Scheme::LinearlyImplicit { w: 0.55 }).expect("cable");
-    let mut failure = None;
+    let mut default = Cable::new(build(), Scheme::default()).expect("cable");
     for _ in 0..720 {
         let t = fast.time();
-        if let Err(e) = fast.step(h) {
-            failure = Some((t, e.to_string()));
-            break;
-        }
-    }
-    let (t, message) = failure.expect("the fast preset stepped a slack rope: update docs/architecture.md");
-    let s = fast.total_stats;
-    println!("fast preset on the slack V: stopped at {t:.3} s: {message}; {} of {} steps taken by the default scheme", s.newton_fallbacks, fast.steps);
-    assert!(t >= 1.0, "the whip of the first second did not run: stopped at {t} s");
-    assert!(s.newton_fallbacks > 0);
-    assert!(message.contains(&format!("t = {}", t + h)) || message.contains(&format!("t = {t}")), "{message}");
-    assert_eq!(fast.time(), t, "a failed step moved the time");
-    assert!(fast.state.is_finite());
-    let mut default = Cable::new(build(), Scheme::default()).expect("cable");
-    for _ in 0..60 {
+        fast.step(h).unwrap_or_else(|e| panic!("the fast preset on the slack V at {t:.3} s: {e}"));
         default.step(h).expect("the default scheme steps the slack V");
     }
+    let s = fast.total_stats;
+    let (mid_fast, mid_default) = (fast.nodes()[24], default.nodes()[24]);
+    let (ke_fast, ke_default) = (fast.kinetic_energy(), default.kinetic_energy());
+    println!(
+        "fast preset on the slack V: 12 s, {} of {} steps taken by the default scheme; mid-span node {:.5} m vs {:.5} m (default), \
+         {:.2e} m apart; kinetic energy {ke_fast:.2e} J vs {ke_default:.2e} J",
+        s.newton_fallbacks,
+        fast.steps,
+        mid_fast.y,
+        mid_default.y,
+        mid_fast.distance(mid_default)
+    );
+    assert!(s.newton_fallbacks > 0 && s.newton_fallbacks < fast.steps as usize);
+    assert!(ke_default < 1e-6, "the default scheme did not settle: {ke_default} J");
+    assert!(ke_fast > 1e3 * ke_default, "the fast preset now settles the slack V ({ke_fast} J): update docs/architecture.md");
+}
+
+/// The hoist pendulum (N = 100, 1 t) with the fast preset at h = 0.05,
+/// 0.1 and 0.5 s for 20 s: every step succeeds (before the preset checked
+/// its steps it diverged at h = 0.05 s, 1.35 s, "element strained"); the
+/// steps one solve cannot take (the 0.5 s step from rest, corrections
+/// beyond the limit) are taken by the default scheme, and the top tension
+/// stays below twice the elastic pendulum's bound m g (3 − 2 cos 30°). But
+/// the kept steps do not conserve or dissipate the energy as the default
+/// scheme does: at h = 0.05 s the total energy rises by up to a tenth of
+/// the swing energy (docs/architecture.md, "Fast preset"); the assertion
+/// below records that, and fails when it is fixed.
+#[test]
+fn fast_preset_runs_large_steps_but_gains_energy() {
+    let w_total = (PAYLOAD + MU * L) * G;
+    let bound = 2.0 * w_total * (3.0 - 2.0 * RELEASE_DEG.to_radians().cos());
+    let swing_energy = (PAYLOAD + MU * L) * G * L * (1.0 - RELEASE_DEG.to_radians().cos());
+    let mut largest_rise = 0.0f64;
+    for h in [0.05, 0.1, 0.5] {
+        let mut cable = Cable::new(hoist(100), Scheme::LinearlyImplicit { w: 0.55 }).expect("cable");
+        let e0 = cable.energy();
+        let (mut rise, mut top) = (f64::NEG_INFINITY, 0.0f64);
+        while cable.time() < T_END - 1e-9 {
+            let t = cable.time();
+            cable.step(h).unwrap_or_else(|e| panic!("h = {h} s at {t:.3} s: {e}"));
+            rise = rise.max((cable.energy() - e0) / swing_energy);
+            top = top.max(cable.tension_at(0.0));
+        }
+        let s = cable.total_stats;
+        println!(
+            "fast preset, h = {h} s: 20 s, {} of {} steps taken by the default scheme; energy rise at most {rise:+.2e}, at the end {:+.2e} of the swing energy; top tension at most {:.2} m g",
+            s.newton_fallbacks,
+            cable.steps,
+            (cable.energy() - e0) / swing_energy,
+            top / w_total
+        );
+        assert!(top.is_finite() && top < bound, "h = {h} s: top tension {top} N above {bound} N");
+        largest_rise = largest_rise.max(rise);
+    }
+    assert!(largest_rise > 1e-2, "the fast preset no longer gains energy on large steps ({largest_rise:+.2e}): update docs/architecture.md");
 }

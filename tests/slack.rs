@@ -116,19 +116,19 @@ fn velocity_damping_matches_the_closed_form_fall() {
 /// step (the results so far stay valid), and says when.
 #[test]
 fn a_failed_step_leaves_state_and_time_unchanged() {
-    // The fast preset (one linearly implicit step) with w = 0.55 and 1 t
-    // on the 20 m, 1.6 kg/m rope released at 30°, at h = 0.05 s, diverges
-    // (at 1.35 s): an element stretched beyond its length, caught after
-    // the integrator's step. (With w ≥ 0.6 it runs.)
+    // 10⁷ kg on the 20 m, 1.6 kg/m rope (EA 2e7 N) released at 30°: its
+    // weight alone would strain the rope by 490 %. The default scheme
+    // stops when an element is stretched beyond sense, caught after the
+    // integrator's step.
     let l = 20.0;
     let dir = DVec3::new(30f64.to_radians().sin(), -30f64.to_radians().cos(), 0.0);
-    let body = LumpedBody::sphere(1e3, 0.3, dir * (l + 0.3));
+    let body = LumpedBody::sphere(1e7, 0.3, dir * (l + 0.3));
     let model = RopeBuilder::new(l, 100, steel20(), 0.02)
         .path(vec![DVec3::ZERO, dir * l])
         .end(RopeEnd::Body { body, anchor: DMat3::IDENTITY * (-dir * 0.3), clamp: false })
         .build()
         .unwrap();
-    let mut cable = Cable::new(model, Scheme::LinearlyImplicit { w: 0.55 }).unwrap();
+    let mut cable = Cable::new(model, Scheme::default()).unwrap();
     let mut failed = None;
     for _ in 0..600 {
         let (t, q, v) = (cable.time(), cable.state.q.clone(), cable.state.v.clone());
@@ -145,7 +145,7 @@ fn a_failed_step_leaves_state_and_time_unchanged() {
             }
         }
     }
-    let e = failed.expect("the fast preset no longer diverges here: replace this case");
+    let e = failed.expect("a rope strained by 490 % no longer stops");
     println!("{e}");
     assert!(matches!(e, CableError::Diverged { .. }), "{e:?}");
 }
@@ -254,7 +254,7 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
     let n = 48;
     let b = DVec3::new(10.0, 0.0, 0.0);
     for (material, section) in [("steel 20 mm", steel20()), ("chain 1 kg/m", chain)] {
-        for (shape, path) in slack_paths() {
+        for ((shape, path), scheme) in slack_paths().into_iter().map(|p| (p, Scheme::default())) {
             let model = RopeBuilder::new(12.0, n, section, 0.02)
                 .start(RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO))))
                 .end(RopeEnd::Pinned(BaseMotion::point(b)))
@@ -262,10 +262,10 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
                 .velocity_damping(2.0, 2.0)
                 .build()
                 .unwrap();
-            let mut cable = Cable::new(model, Scheme::default()).unwrap();
+            let mut cable = Cable::new(model, scheme.clone()).unwrap();
             let mut most = 0;
             while cable.time() < 12.0 - 1e-9 {
-                let stats = cable.step(1.0 / 60.0).unwrap_or_else(|e| panic!("{material} {shape}: {e}"));
+                let stats = cable.step(1.0 / 60.0).unwrap_or_else(|e| panic!("{material} {shape}, {scheme}: {e}"));
                 most = most.max(stats.substeps_used);
             }
             let w = section.linear_density * G;
@@ -278,10 +278,12 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
             let (es, et) = ((sag - sag_ref) / sag_ref, (t_end - t_ref) / t_ref);
             let s = cable.total_stats;
             println!(
-                "{material}, {shape}: sag {sag:.4} m ({es:+.1e}), end force {t_end:.2} N ({et:+.1e}), kinetic energy {:.1e} J; {:.1} Newton iterations and {:.2} sub-steps per frame step (most {most})",
+                "{material}, {shape}, {scheme}: sag {sag:.4} m ({es:+.1e}), end force {t_end:.2} N ({et:+.1e}), kinetic energy {:.1e} J; {:.1} Newton iterations and {:.2} sub-steps per frame step (most {most}), {} of {} steps by the default scheme",
                 cable.kinetic_energy(),
                 s.newton_iterations as f64 / cable.steps as f64,
-                s.substeps_used as f64 / cable.steps as f64
+                s.substeps_used as f64 / cable.steps as f64,
+                s.newton_fallbacks,
+                cable.steps
             );
             // The static equilibrium of the same model (pseudo-transient
             // continuation from the parabola): a steel rope's bending
@@ -303,10 +305,10 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
                 t_end / t_static - 1.0,
                 t_static / t_ref - 1.0
             );
-            assert!(es.abs() < 0.01, "{material} {shape}: sag {es:+.2e}");
-            assert!((t_end / t_static - 1.0).abs() < 1e-3, "{material} {shape}: not settled");
+            assert!(es.abs() < 0.01, "{material} {shape}, {scheme}: sag {es:+.2e}");
+            assert!((t_end / t_static - 1.0).abs() < 1e-3, "{material} {shape}, {scheme}: not settled");
             if section.ei < 1.0 {
-                assert!(et.abs() < 0.01, "{material} {shape}: end force {et:+.2e} from the catenary");
+                assert!(et.abs() < 0.01, "{material} {shape}, {scheme}: end force {et:+.2e} from the catenary");
             }
         }
     }
@@ -314,46 +316,62 @@ fn slack_rope_pinned_at_both_ends_settles_to_the_elastic_catenary() {
 
 /// The hoist pendulum of the issue (20 m of 20 mm steel rope, N = 100,
 /// released unstretched at 30°) with a 10⁵ kg payload at 1/60 s, and with
-/// 1 t at h = 0.05, 0.1 and 0.5 s, 20 s each with the default integrator:
+/// 1 t at h = 0.05, 0.1 and 0.5 s, 20 s each with the default integrator
+/// and 10⁵ kg at 1/60 s with the fast preset (its steps that one solve
+/// cannot take are taken by the default scheme; before it checked its
+/// steps it diverged at 0.3 s; its large steps: `tests/fast_preset.rs`):
 /// every step succeeds (the 0.5 s step with internal sub-steps), the total
 /// energy never rises above its initial value by more than 1e-3 of the
 /// swing energy m g L (1 − cos 30°) (generalized-α ρ∞ = 0 only
-/// dissipates), and the top tension stays below the elastic pendulum's
+/// dissipates; the fast preset 1e-2, below), and the top tension stays below the elastic pendulum's
 /// bound: m g (3 − 2 cos 30°), doubled for the axial bounce of a rope
 /// released unstretched. (10⁵ kg stretches this rope by 5.4 %.)
 #[test]
 fn heavy_payload_and_large_steps_stay_stable_on_the_hoist_pendulum() {
     let l = 20.0;
     let dir = DVec3::new(30f64.to_radians().sin(), -30f64.to_radians().cos(), 0.0);
-    for (mass, h) in [(1e5, 1.0 / 60.0), (1e3, 0.05), (1e3, 0.1), (1e3, 0.5)] {
+    let cases = [(1e5, 1.0 / 60.0), (1e3, 0.05), (1e3, 0.1), (1e3, 0.5)];
+    let fast = [((1e5, 1.0 / 60.0), Scheme::LinearlyImplicit { w: 0.55 })];
+    for ((mass, h), scheme) in cases.into_iter().map(|c| (c, Scheme::default())).chain(fast) {
         let body = LumpedBody::sphere(mass, 0.3, dir * (l + 0.3));
         let model = RopeBuilder::new(l, 100, steel20(), 0.02)
             .path(vec![DVec3::ZERO, dir * l])
             .end(RopeEnd::Body { body, anchor: -dir * 0.3, clamp: false })
             .build()
             .unwrap();
-        let mut cable = Cable::new(model, Scheme::default()).unwrap();
+        let mut cable = Cable::new(model, scheme.clone()).unwrap();
         let e0 = cable.energy();
         let swing = mass * G * l * (1.0 - 30f64.to_radians().cos());
-        let (mut rise, mut worst_t, mut most) = (f64::NEG_INFINITY, 0.0f64, 0);
+        let (mut rise, mut rise_t, mut worst_t, mut most) = (f64::NEG_INFINITY, 0.0, 0.0f64, 0);
         while cable.time() < 20.0 - 1e-9 {
-            let stats = cable.step(h).unwrap_or_else(|e| panic!("m = {mass} kg, h = {h} s: {e}"));
+            let stats = cable.step(h).unwrap_or_else(|e| panic!("{scheme}, m = {mass} kg, h = {h} s: {e}"));
             most = most.max(stats.substeps_used);
-            rise = rise.max((cable.energy() - e0) / swing);
+            let r = (cable.energy() - e0) / swing;
+            if r > rise {
+                (rise, rise_t) = (r, cable.time());
+            }
             worst_t = worst_t.max(cable.tension_at(0.0));
         }
         let w = (mass + 1.6 * l) * G;
         let bound = 2.0 * w * (3.0 - 2.0 * 30f64.to_radians().cos());
         let s = cable.total_stats;
         println!(
-            "m = {mass} kg, h = {h} s: energy rise at most {rise:+.1e}, at the end {:+.2e} of the swing energy; largest top tension {:.2} m g; {:.1} Newton iterations, {:.2} sub-steps per step (most {most})",
+            "{scheme}, m = {mass} kg, h = {h} s: energy rise at most {rise:+.1e} (at {rise_t:.2} s), at the end {:+.2e} of the swing energy; largest top tension {:.2} m g; {:.1} Newton iterations, {:.2} sub-steps per step (most {most}), {} of {} steps taken by the default scheme",
             (cable.energy() - e0) / swing,
             worst_t / w,
             s.newton_iterations as f64 / cable.steps as f64,
-            s.substeps_used as f64 / cable.steps as f64
+            s.substeps_used as f64 / cable.steps as f64,
+            s.newton_fallbacks,
+            cable.steps
         );
-        assert!(rise < 1e-3, "energy rose by {rise} of the swing energy");
-        assert!(worst_t.is_finite() && worst_t < bound, "top tension {worst_t} N above {bound} N");
+        // The fast preset keeps a step whose end leaves the θ-step's equation
+        // unsolved by up to its limit (a next correction of 1 mm): on the
+        // 10⁵ kg payload's release bounce (5.4 % stretch, an elastic energy
+        // of 20 % of the swing energy) that let the energy rise by 3.1e-3 of
+        // the swing energy. An instability grows without bound.
+        let allowed = if scheme == Scheme::default() { 1e-3 } else { 1e-2 };
+        assert!(rise < allowed, "{scheme}, m = {mass} kg, h = {h} s: energy rose by {rise} of the swing energy");
+        assert!(worst_t.is_finite() && worst_t < bound, "{scheme}, m = {mass} kg, h = {h} s: top tension {worst_t} N above {bound} N");
     }
 }
 

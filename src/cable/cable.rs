@@ -169,16 +169,15 @@ impl Cable {
         self.total_stats += stats;
         self.steps += 1;
         // Newton schemes last evaluated the residual at their converged
-        // iterate (within the position tolerance of the final state): the
-        // chain's kinematics are current. Other schemes last evaluated an
+        // iterate (within the position tolerance of the final state), the
+        // fast preset at its end state (its acceptance test): the chain's
+        // kinematics are current. Other schemes last evaluated an
         // intermediate stage.
-        let newton_converged =
-            matches!(self.integrator.scheme, Scheme::GeneralizedAlpha { .. } | Scheme::Hht { .. } | Scheme::Newmark { .. } | Scheme::LinearAcceleration)
-                && stats.substeps_used == 1;
+        let current = self.integrator.evaluated_at_end() && stats.substeps_used == 1;
         if self.model.layout.free_start {
             self.rechart_free_start()?;
         }
-        if !newton_converged || self.model.layout.free_start {
+        if !current || self.model.layout.free_start {
             self.refresh();
         }
         Ok(stats)

@@ -56,9 +56,11 @@ pub struct StepStats {
     /// ([`SecondOrderSystem::set_definite_tangent`]).
     pub definite_retries: usize,
     /// Steps of the fast preset ([`Scheme::LinearlyImplicit`]) whose single
-    /// linearised solve crossed a kink of a non-smooth law (a slack rope
-    /// element pulled taut) and were taken again by the default scheme
-    /// (generalized-α with Newton).
+    /// linearised solve did not hold and were taken again by the default
+    /// scheme (generalized-α with Newton): it crossed a kink of a
+    /// non-smooth law (a slack rope element pulled taut), or the residual
+    /// it left needs a further correction of more than 1 mm or 1 mrad (a
+    /// step too nonlinear for one solve).
     pub newton_fallbacks: usize,
 }
 
@@ -185,8 +187,12 @@ pub struct Integrator {
     split: u32,
     calm: u32,
     /// The fast preset's current step is taken by the default scheme (its
-    /// linearised solve crossed a kink of a non-smooth law).
+    /// linearised solve did not hold).
     as_default: bool,
+    /// The last step's last residual evaluation was at its end state (a
+    /// converged Newton iterate, or the fast preset's acceptance test), so
+    /// the system's kinematics and readouts are current.
+    end_evaluated: bool,
     ws: Workspace,
 }
 
@@ -207,6 +213,7 @@ impl Integrator {
             split: 1,
             calm: 0,
             as_default: false,
+            end_evaluated: false,
             ws: Workspace::default(),
         }
     }
@@ -237,6 +244,7 @@ impl Integrator {
         state.check_dimensions(sys.dof())?;
         self.ws.ensure(state.dof());
         self.ws.save(state);
+        self.end_evaluated = false;
         let mut stats = StepStats::default();
         let result = if self.scheme.is_explicit() {
             self.step_explicit(sys, state, h, &mut stats)
@@ -273,6 +281,7 @@ impl Integrator {
             split,
             calm: if calm == u32::MAX { 0 } else { calm },
             as_default: false,
+            end_evaluated: false,
             ws: Workspace::default(),
         }
     }
@@ -299,6 +308,15 @@ impl Integrator {
     /// its length).
     pub fn undo_step(&self, state: &mut State) {
         self.ws.restore(state);
+    }
+
+    /// Whether the last successful [`step`](Self::step)'s last residual
+    /// evaluation was at the state it ended on (an implicit scheme whose
+    /// Newton solve converged, or the fast preset's acceptance test), so a
+    /// system's kinematics need no refresh there. False after an explicit
+    /// or Wilson-θ step and after the fast preset's non-stiff form.
+    pub fn evaluated_at_end(&self) -> bool {
+        self.end_evaluated
     }
 
     fn step_explicit<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, h: f64, stats: &mut StepStats) -> Result<(), IntegrateError> {
@@ -383,7 +401,7 @@ impl Integrator {
                 }
                 Err(failure) => {
                     self.ws.restore(state);
-                    if matches!(failure, Failure::Kink) {
+                    if matches!(failure, Failure::Linearisation) {
                         // The fast preset: the whole step again with the
                         // default scheme, from its acceleration.
                         stats.newton_fallbacks += 1;
@@ -426,7 +444,7 @@ impl Integrator {
                         return Err(match failure {
                             Failure::NotConverged { iterations } => IntegrateError::NotConverged { t, h, substeps: n, iterations },
                             Failure::Error(e) => e,
-                            Failure::Kink => IntegrateError::NotConverged { t, h, substeps: n, iterations: 1 },
+                            Failure::Linearisation => IntegrateError::NotConverged { t, h, substeps: n, iterations: 1 },
                         });
                     }
                     n = next;
@@ -441,15 +459,19 @@ impl Integrator {
         let newton = &self.newton;
         for k in 0..n {
             state.t = t + h * f64::from(k) / f64::from(n);
-            match self.scheme {
-                Scheme::WilsonTheta { theta } => step_wilson(sys, state, ws, theta, hs, newton, stats)?,
+            self.end_evaluated = match self.scheme {
+                Scheme::WilsonTheta { theta } => {
+                    step_wilson(sys, state, ws, theta, hs, newton, stats)?;
+                    false
+                }
                 Scheme::LinearlyImplicit { w } if !self.as_default => step_linearly_implicit(sys, state, ws, w, hs, newton, stats)?,
                 ref s => {
                     let p = if self.as_default { Scheme::default().alpha_parameters() } else { s.alpha_parameters() };
                     let p = p.expect("every other implicit scheme is generalized-α");
-                    step_alpha(sys, state, ws, p, hs, newton, stats)?
+                    step_alpha(sys, state, ws, p, hs, newton, stats)?;
+                    true
                 }
-            }
+            };
             if !state.is_finite() {
                 return Err(Failure::Error(IntegrateError::NonFinite { t: state.t }));
             }

@@ -44,4 +44,4 @@ pub use self::newton::{NewtonSettings, KINK_BAND, LAST_RESORT_BRANCH_UPDATES, MA
 pub use self::pendulum::Pendulum;
 pub use self::scheme::{stability_limit, AlphaParameters, Scheme, SchemeError, SchemeParams};
 pub use self::state::State;
-pub use self::system::{SecondOrderSystem, SystemError};
+pub use self::system::{LinearisationLimits, SecondOrderSystem, SystemError};

@@ -22,7 +22,7 @@ use super::integrator::{StepStats, Workspace};
 use super::newton::{self, Affine, Failure, NewtonSettings};
 use super::scheme::AlphaParameters;
 use super::state::State;
-use super::system::SecondOrderSystem;
+use super::system::{LinearisationLimits, SecondOrderSystem};
 
 /// One generalized-α step of size `h` (s) with Newton on `a₁` from the
 /// predictor `a₁ = a₀ + (a₀ − a₋₁) h/h₋₁` (linear extrapolation when the
@@ -100,9 +100,20 @@ const DIRECTION_FRACTION: f64 = 1.0 / 64.0;
 ///   `tests/fast_preset.rs`).
 ///
 /// On a linear system both forms are the same θ-step (exact linearisation).
-/// A stiff-form pass whose result crosses a kink of a non-smooth law fails
-/// with [`Failure::Kink`]: the integrator takes the step again with the
-/// default scheme.
+///
+/// The stiff form then evaluates the residual at the step's end (the pass
+/// that refreshes the chain's readouts there, which the caller would
+/// otherwise make) and keeps the step only if its solve corrected the
+/// prediction by at most the system's
+/// [`LinearisationLimits::correction`] and one more Newton correction,
+/// estimated from that residual, would move no coordinate by more than its
+/// [`LinearisationLimits::next_correction`] (systems without limits, whose
+/// coordinates have no known scale, skip the check). A pass that fails
+/// that test, or whose result
+/// crosses a kink of a non-smooth law, fails with
+/// [`Failure::Linearisation`]: the integrator takes the step again with the
+/// default scheme. Returns whether the residual was last evaluated at the
+/// step's end state.
 pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     state: &mut State,
@@ -111,7 +122,7 @@ pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
     h: f64,
     settings: &NewtonSettings,
     stats: &mut StepStats,
-) -> Result<(), Failure> {
+) -> Result<bool, Failure> {
     // v₁ = v + h(1 − w) a₀ + h w a₁;  q₁ = q + h v + h² w (1 − w) a₀ + h² w² a₁.
     for i in 0..state.dof() {
         let a0 = state.a[i];
@@ -121,8 +132,13 @@ pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
     }
     let map = Affine { t: state.t + h, c_q: h * h * w * w, c_v: h * w, h };
     let stiff = sys.max_frequency(&state.q).is_none_or(|omega| omega.is_nan() || omega * h > LINEARLY_IMPLICIT_STIFF_OMEGA);
+    let mut end_evaluated = false;
     if stiff {
         linearised_at_start(sys, state, ws, map, stats)?;
+        if let Some(limits) = sys.linearisation_limits() {
+            check_linearisation(sys, ws, map, limits, stats)?;
+            end_evaluated = true;
+        }
     } else {
         newton::solve(sys, ws, map, settings, true, stats, (&state.q, &state.v))?;
     }
@@ -131,14 +147,41 @@ pub(crate) fn step_linearly_implicit<S: SecondOrderSystem + ?Sized>(
     state.a.copy_from_slice(&ws.x);
     state.a_hat.copy_from_slice(&ws.x);
     state.t += h;
-    Ok(())
+    Ok(end_evaluated)
+}
+
+/// The acceptance test of the stiff form (see [`step_linearly_implicit`]):
+/// the residual at the end state `(ws.q, ws.v, ws.x)` against the
+/// linearised prediction's `ws.r`, with the solve's correction `ws.dx`.
+fn check_linearisation<S: SecondOrderSystem + ?Sized>(
+    sys: &mut S,
+    ws: &mut Workspace,
+    map: Affine,
+    limits: LinearisationLimits,
+    stats: &mut StepStats,
+) -> Result<(), Failure> {
+    let Affine { t, c_q, .. } = map;
+    sys.residual(t, &ws.q, &ws.v, &ws.x, &mut ws.sq).map_err(|source| Failure::Error(IntegrateError::System { t, source }))?;
+    stats.residual_evals += 1;
+    let max_abs = |x: &[f64]| x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let (r0, r1) = (max_abs(&ws.r), max_abs(&ws.sq));
+    if !r1.is_finite() {
+        return Err(IntegrateError::NonFinite { t }.into());
+    }
+    let correction = c_q * max_abs(&ws.dx);
+    let next_correction = correction * (r1 / r0.max(f64::MIN_POSITIVE));
+    if correction <= limits.correction && next_correction <= limits.next_correction {
+        Ok(())
+    } else {
+        Err(Failure::Linearisation)
+    }
 }
 
 /// The stiff form of [`step_linearly_implicit`]: with `x = a₀` in `ws.x`
 /// and the affine bases in `ws.qb`, `ws.vb`, solves
 /// `(M + c_v C + c_q K) δ = −r(t₁, q, v_p, a₀) − K d` at `(q, v_p, a₀)`,
 /// `K d` by a directional difference, and leaves `x = a₀ + δ` and the
-/// matching coordinates in `ws`. Fails with [`Failure::Kink`] when the
+/// matching coordinates in `ws`. Fails with [`Failure::Linearisation`] when the
 /// result lies on another branch of a non-smooth law than the one
 /// linearised (beyond the tolerances of
 /// [`SecondOrderSystem::update_branches`]): one linear solve does not hold
@@ -189,7 +232,7 @@ fn linearised_at_start<S: SecondOrderSystem + ?Sized>(
     if same_branches {
         Ok(())
     } else {
-        Err(Failure::Kink)
+        Err(Failure::Linearisation)
     }
 }
 

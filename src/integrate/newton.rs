@@ -53,9 +53,12 @@ pub(crate) enum Failure {
     NotConverged { iterations: usize },
     /// The system failed, or the state became non-finite.
     Error(IntegrateError),
-    /// The fast preset's single linearised solve crossed a kink of a
-    /// non-smooth law: the step is taken again by the default scheme.
-    Kink,
+    /// The fast preset's single linearised solve does not hold: it crossed
+    /// a kink of a non-smooth law, or the residual it left at the step's end
+    /// needs a further correction beyond the preset's limit (the step's
+    /// nonlinearity is too large for one solve). The step is taken again by
+    /// the default scheme.
+    Linearisation,
 }
 
 impl From<IntegrateError> for Failure {

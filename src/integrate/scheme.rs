@@ -85,13 +85,15 @@ pub enum Scheme {
     /// stretch and bending: `tests/fast_preset.rs`); on a linear system both
     /// are the same θ-step.
     ///
-    /// For taut ropes. A step whose solve crosses a kink of a non-smooth
-    /// law (a slack element pulled taut) is taken again by the default
-    /// scheme ([`StepStats::newton_fallbacks`]). A rope slack between two
-    /// pins, very heavy payloads and large steps still need the default
-    /// scheme (one solve cannot tell a poor linearisation, nor correct an
-    /// end anchor's lever error; measured in docs/architecture.md, "Fast
-    /// preset"). Such a step stops with an error naming the time.
+    /// The stiff form checks its step: the residual at the end state (the
+    /// pass that refreshes the rope's readouts) estimates what one more
+    /// Newton correction would move. A step whose estimate exceeds 1 mm
+    /// (or 1 mrad), or whose solve crosses a kink of a non-smooth law (a
+    /// slack element pulled taut), is taken again by the default scheme
+    /// ([`StepStats::newton_fallbacks`]). A taut swing takes one solve per
+    /// step; a whipping slack rope, a very heavy payload or a large step
+    /// fall back on the steps one solve cannot take (measured in
+    /// docs/architecture.md, "Fast preset").
     ///
     /// [`StepStats::newton_fallbacks`]: super::StepStats::newton_fallbacks
     ///

@@ -95,6 +95,17 @@ pub trait SecondOrderSystem {
         1e-10
     }
 
+    /// Limits of the fast preset's step check ([`Scheme::LinearlyImplicit`]
+    /// at its stiff form), in the units of `q`: a step whose single solve
+    /// goes beyond them is taken again by the default scheme. `None` (the
+    /// default, for coordinates without a known scale) keeps every step
+    /// that crosses no kink.
+    ///
+    /// [`Scheme::LinearlyImplicit`]: super::Scheme::LinearlyImplicit
+    fn linearisation_limits(&self) -> Option<LinearisationLimits> {
+        None
+    }
+
     /// Non-smooth laws (a slack rope's tension-only elements; contact
     /// next): freeze each law on a branch (taut or slack) chosen from the
     /// coordinates and velocities `(q, v)` at the start of the step,
@@ -168,4 +179,39 @@ pub trait SecondOrderSystem {
     /// solve failed, so steps that converge with the exact tangent are
     /// unchanged. Default: no fallback (nothing to switch).
     fn set_definite_tangent(&mut self, _on: bool) {}
+}
+
+/// How far the fast preset's single linearised solve may go before its
+/// step is taken again by the default scheme
+/// ([`SecondOrderSystem::linearisation_limits`]), in the units of the
+/// coordinates (m or rad for a rope).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinearisationLimits {
+    /// Largest correction the solve may make to the predicted
+    /// configuration, any coordinate.
+    pub correction: f64,
+    /// Largest estimated next Newton correction, any coordinate: the
+    /// solve's correction scaled by the ratio of the residual at the step's
+    /// end to the linearised prediction's (max norms), what one more
+    /// Newton iteration with the same tangent would move.
+    pub next_correction: f64,
+}
+
+impl LinearisationLimits {
+    /// A rope's (relative coordinates: m and rad).
+    ///
+    /// * `correction` 0.02: at most 8.5·10⁻³ on the hoist pendulum at
+    ///   1/60 s (`tests/fast_preset.rs`, N = 10, 100, 1 000). Its first
+    ///   0.5 s step from rest corrects by 1.1, and the default scheme could
+    ///   not step on from the state that step left (released at 31° and
+    ///   40°). On the slack V the kept steps that corrected by 0.014 to
+    ///   0.057 each raised the kinetic energy from under 1 J to 8–135 J; at
+    ///   0.02 the kicks are at most 8 J (3 J at 0.01).
+    /// * `next_correction` 10⁻³: at most 6.1·10⁻⁴ on the hoist pendulum
+    ///   (median 3·10⁻⁹); 5·10⁻³ and more in the steps that, kept, left the
+    ///   slack V a state the default scheme could not step from (it failed
+    ///   at 1.47 s). Any limit from 10⁻⁴ to 4·10⁻³ runs that rope and the
+    ///   10⁵ kg payload, with more fallbacks the lower it is (58 of the
+    ///   N = 100 hoist pendulum's 1 200 steps at 10⁻⁴).
+    pub const ROPE: LinearisationLimits = LinearisationLimits { correction: 0.02, next_correction: 1e-3 };
 }

@@ -390,6 +390,9 @@ impl SecondOrderSystem for Forest<'_> {
     fn position_tolerance(&self) -> f64 {
         self.chains.iter().map(|c| c.position_tolerance).fold(f64::INFINITY, f64::min)
     }
+    fn linearisation_limits(&self) -> Option<crate::integrate::LinearisationLimits> {
+        Some(crate::integrate::LinearisationLimits::ROPE)
+    }
     fn freeze_branches(&mut self, start: (&[f64], &[f64]), predicted: (&[f64], &[f64])) {
         for k in 0..self.chains.len() {
             let rg = self.range(k);

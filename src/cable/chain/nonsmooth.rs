@@ -47,6 +47,9 @@ impl SecondOrderSystem for Chain {
     fn position_tolerance(&self) -> f64 {
         self.position_tolerance
     }
+    fn linearisation_limits(&self) -> Option<crate::integrate::LinearisationLimits> {
+        Some(crate::integrate::LinearisationLimits::ROPE)
+    }
     fn freeze_branches(&mut self, start: (&[f64], &[f64]), predicted: (&[f64], &[f64])) {
         // An invalid description freezes nothing: the next evaluation
         // reports it.
