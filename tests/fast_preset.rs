@@ -120,7 +120,7 @@ fn closed_form_period() -> f64 {
 #[test]
 fn fast_preset_swings_the_hoist_pendulum_like_the_reference() {
     let h = 1.0 / 60.0;
-    let fast = Scheme::LinearlyImplicit { w: 0.55 };
+    let fast = Scheme::LinearlyImplicit { w: 0.6 };
     assert_eq!(fast, "linearly_implicit".parse().expect("preset name"));
     println!("closed-form cross-check (rigid compound pendulum, 30°): T = {:.4} s", closed_form_period());
     for n in [10, 100, 1000] {
@@ -164,7 +164,7 @@ fn fast_preset_swings_the_hoist_pendulum_like_the_reference() {
 fn default_newton_iterations_against_the_preset_at_n_1000() {
     let h = 1.0 / 60.0;
     let newton = swing(1000, Scheme::default(), h).expect("default scheme");
-    let fast = swing(1000, Scheme::LinearlyImplicit { w: 0.55 }, h).expect("fast preset");
+    let fast = swing(1000, Scheme::LinearlyImplicit { w: 0.6 }, h).expect("fast preset");
     println!(
         "N = 1000, h = 1/60 s, 20 s: default {:.2} Newton iterations ({:.2} fused residual+solve passes) per step, {:.2} ms/step; \
          preset {:.2} solve + {:.2} residuals per step, {:.2} ms/step (both timings include the test's per-step measurements \
@@ -195,7 +195,7 @@ fn predicted_configuration_form_diverges_on_the_stiff_rope() {
     let h = 1.0 / 60.0;
     let mut model = hoist(100);
     model.chain.max_frequency = Some(1.0);
-    let mut cable = Cable::new(model, Scheme::LinearlyImplicit { w: 0.55 }).expect("cable");
+    let mut cable = Cable::new(model, Scheme::LinearlyImplicit { w: 0.6 }).expect("cable");
     let mut failure = None;
     for _ in 0..120 {
         if let Err(e) = cable.step(h) {
@@ -235,7 +235,7 @@ fn fast_preset_runs_a_rope_slack_between_two_pins_but_does_not_settle_it() {
             .expect("slack rope")
     };
     let h = 1.0 / 60.0;
-    let mut fast = Cable::new(build(), Scheme::LinearlyImplicit { w: 0.55 }).expect("cable");
+    let mut fast = Cable::new(build(), Scheme::LinearlyImplicit { w: 0.6 }).expect("cable");
     let mut default = Cable::new(build(), Scheme::default()).expect("cable");
     for _ in 0..720 {
         let t = fast.time();
@@ -263,20 +263,19 @@ fn fast_preset_runs_a_rope_slack_between_two_pins_but_does_not_settle_it() {
 /// 0.1 and 0.5 s for 20 s: every step succeeds (before the preset checked
 /// its steps it diverged at h = 0.05 s, 1.35 s, "element strained"); the
 /// steps one solve cannot take (the 0.5 s step from rest, corrections
-/// beyond the limit) are taken by the default scheme, and the top tension
-/// stays below twice the elastic pendulum's bound m g (3 − 2 cos 30°). But
-/// the kept steps do not conserve or dissipate the energy as the default
-/// scheme does: at h = 0.05 s the total energy rises by up to a tenth of
-/// the swing energy (docs/architecture.md, "Fast preset"); the assertion
-/// below records that, and fails when it is fixed.
+/// beyond the limit) are taken by the default scheme; the top tension
+/// stays below twice the elastic pendulum's bound m g (3 − 2 cos 30°),
+/// and the total energy never rises above its start by more than 1e-3 of
+/// the swing energy. (With w = 0.55, the preset's weight before
+/// 2026-11-27, the kept steps at h = 0.05 s raised it by 7.7 % of the
+/// swing energy: the reason the preset is now w = 0.6.)
 #[test]
-fn fast_preset_runs_large_steps_but_gains_energy() {
+fn fast_preset_runs_large_steps_without_gaining_energy() {
     let w_total = (PAYLOAD + MU * L) * G;
     let bound = 2.0 * w_total * (3.0 - 2.0 * RELEASE_DEG.to_radians().cos());
     let swing_energy = (PAYLOAD + MU * L) * G * L * (1.0 - RELEASE_DEG.to_radians().cos());
-    let mut largest_rise = 0.0f64;
     for h in [0.05, 0.1, 0.5] {
-        let mut cable = Cable::new(hoist(100), Scheme::LinearlyImplicit { w: 0.55 }).expect("cable");
+        let mut cable = Cable::new(hoist(100), Scheme::LinearlyImplicit { w: 0.6 }).expect("cable");
         let e0 = cable.energy();
         let (mut rise, mut top) = (f64::NEG_INFINITY, 0.0f64);
         while cable.time() < T_END - 1e-9 {
@@ -294,7 +293,6 @@ fn fast_preset_runs_large_steps_but_gains_energy() {
             top / w_total
         );
         assert!(top.is_finite() && top < bound, "h = {h} s: top tension {top} N above {bound} N");
-        largest_rise = largest_rise.max(rise);
+        assert!(rise < 1e-3, "h = {h} s: the energy rose by {rise:+.2e} of the swing energy");
     }
-    assert!(largest_rise > 1e-2, "the fast preset no longer gains energy on large steps ({largest_rise:+.2e}): update docs/architecture.md");
 }

@@ -127,7 +127,7 @@ pub struct SchemeParams {
     pub alpha: Option<f64>,
     /// Generalized-α ρ∞ (dimensionless). Default 0.
     pub rho_inf: Option<f64>,
-    /// Linearly implicit weight w (dimensionless). Default 0.55.
+    /// Linearly implicit weight w (dimensionless). Default 0.6.
     pub w: Option<f64>,
 }
 
@@ -297,7 +297,7 @@ impl Scheme {
             "hht" => Scheme::Hht { alpha: params.alpha.unwrap_or(-0.1) },
             "generalized_alpha" => Scheme::GeneralizedAlpha { rho_inf: params.rho_inf.unwrap_or(0.0) },
             "backward_euler" => Scheme::LinearlyImplicit { w: 1.0 },
-            _ => Scheme::LinearlyImplicit { w: params.w.unwrap_or(0.55) },
+            _ => Scheme::LinearlyImplicit { w: params.w.unwrap_or(0.6) },
         };
         scheme.validate()?;
         Ok(scheme)
