@@ -50,6 +50,12 @@ impl SecondOrderSystem for Chain {
     fn linearisation_limits(&self) -> Option<crate::integrate::LinearisationLimits> {
         Some(crate::integrate::LinearisationLimits::ROPE)
     }
+    fn resolve_last_tangent(&mut self, b: &[f64], x: &mut [f64]) -> bool {
+        // The tree's elimination only (no pair-element loop correction),
+        // with the motion axes of the last residual: an estimate.
+        self.resolve(b, x, |_, _| {});
+        true
+    }
     fn freeze_branches(&mut self, start: (&[f64], &[f64]), predicted: (&[f64], &[f64])) {
         // An invalid description freezes nothing: the next evaluation
         // reports it.
