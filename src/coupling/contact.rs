@@ -323,6 +323,25 @@ impl FrictionMemory {
         (offset + added).min(depth.max(0.0))
     }
 
+    /// [`FrictionMemory::sunk`] against a moving (kinematic) collider: only
+    /// a touch point new to the step takes its overlap as an offset (a
+    /// body rapier left in a platform that was rising, when it joins a
+    /// rope's island); a continuing one keeps its offset, shrinking as the
+    /// body comes out, and never adds to it: the plane, moved on at the
+    /// obstacle's velocity over the step, misses its acceleration, and an
+    /// offset grown by that would let a body sink into an accelerating
+    /// platform. (Without it, a 20 kg box under a rope, which rapier had
+    /// left 0.28 mm in a platform rising at 2 m/s², started its first
+    /// island step 1.1 mm in it, beyond [`GROUNDED_DEPTH`], and the steel
+    /// contact threw it up at 108 m/s, 2026-11-27.)
+    fn sunk_on_moving(&self, site: Site, depth: f64) -> f64 {
+        match self.sunk.get(&site) {
+            Some(&(_, offset)) => offset.min(depth.max(0.0)),
+            None if depth > SUNK_TOLERANCE => depth,
+            None => 0.0,
+        }
+    }
+
     /// The remembered pair touch nearest to `at` (m, world; the midpoint of
     /// a contact's two points now) within its reach, among `memories`.
     pub(crate) fn recall<'m>(memories: impl IntoIterator<Item = &'m [PairTouch]>, at: DVec3) -> Option<PairTouch> {
@@ -841,13 +860,11 @@ impl BodyTouch {
                     }
                     let site = Site::Body { collider: *own, point, obstacle: obstacle.handle };
                     let mut contact = obstacle.contact(hit, *radius, law);
-                    // (Only against a fixed collider: a moving one's
-                    // plane, moved on at its velocity over the step, misses
-                    // its acceleration, and an offset would take that in
-                    // as well: a body on an accelerating platform would
-                    // sink into it.)
+                    // (Against a moving collider only a new touch point's
+                    // overlap: `sunk_on_moving`.)
                     let fixed = obstacle.body.is_none_or(|b| b.is_fixed());
-                    let offset = if fixed { memory.sunk(site, radius - hit.2) } else { 0.0 };
+                    let depth = radius - hit.2;
+                    let offset = if fixed { memory.sunk(site, depth) } else { memory.sunk_on_moving(site, depth) };
                     contact.point -= contact.normal * offset;
                     let element = memory.note_sunk(site, contact, mu, 0.0, [co.parent(), Some(self.body)], offset);
                     hits.push(AttachedForce { link: self.link, local_point: self.place.0 + self.place.1 * *q, element: Arc::new(element) });
