@@ -58,9 +58,12 @@ pub struct StepStats {
     /// Steps of the fast preset ([`Scheme::LinearlyImplicit`]) whose single
     /// linearised solve did not hold and were taken again by the default
     /// scheme (generalized-α with Newton): it crossed a kink of a
-    /// non-smooth law (a slack rope element pulled taut), or the residual
-    /// it left needs a further correction of more than 1 mm or 1 mrad (a
-    /// step too nonlinear for one solve).
+    /// non-smooth law (a slack rope element pulled taut), or it moved
+    /// beyond the system's [`LinearisationLimits`] (a rope's: 0.02 m or rad
+    /// from the prediction, or a next Newton correction of more than 2 mm
+    /// or 2 mrad; a step too nonlinear for one solve).
+    ///
+    /// [`LinearisationLimits`]: super::LinearisationLimits
     pub newton_fallbacks: usize,
 }
 
@@ -314,7 +317,9 @@ impl Integrator {
     /// evaluation was at the state it ended on (an implicit scheme whose
     /// Newton solve converged, or the fast preset's acceptance test), so a
     /// system's kinematics need no refresh there. False after an explicit
-    /// or Wilson-θ step and after the fast preset's non-stiff form.
+    /// or Wilson-θ step, after the fast preset's non-stiff form, and after
+    /// its stiff form on a system without
+    /// [`linearisation_limits`](SecondOrderSystem::linearisation_limits).
     pub fn evaluated_at_end(&self) -> bool {
         self.end_evaluated
     }

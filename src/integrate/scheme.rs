@@ -86,10 +86,13 @@ pub enum Scheme {
     /// are the same θ-step.
     ///
     /// The stiff form checks its step: the residual at the end state (the
-    /// pass that refreshes the rope's readouts) estimates what one more
-    /// Newton correction would move. A step whose estimate exceeds 1 mm
-    /// (or 1 mrad), or whose solve crosses a kink of a non-smooth law (a
-    /// slack element pulled taut), is taken again by the default scheme
+    /// pass that refreshes the rope's readouts), solved with the step's own
+    /// elimination, gives what one more Newton correction would move. A step
+    /// whose solve moved a coordinate by more than the system's limits
+    /// ([`SecondOrderSystem::linearisation_limits`]; a rope's: 0.02 m or
+    /// rad from the prediction, 2 mm or 2 mrad for the next correction), or
+    /// whose solve crosses a kink of a non-smooth law (a slack element
+    /// pulled taut), is taken again by the default scheme
     /// ([`StepStats::newton_fallbacks`]). A taut swing takes one solve per
     /// step; a whipping slack rope, a very heavy payload or a large step
     /// fall back on the steps one solve cannot take (measured in
@@ -98,6 +101,7 @@ pub enum Scheme {
     /// [`StepStats::newton_fallbacks`]: super::StepStats::newton_fallbacks
     ///
     /// [`SecondOrderSystem::max_frequency`]: super::SecondOrderSystem::max_frequency
+    /// [`SecondOrderSystem::linearisation_limits`]: super::SecondOrderSystem::linearisation_limits
     LinearlyImplicit {
         /// Implicitness weight w (dimensionless), in `[1/2, 1]`.
         w: f64,
