@@ -306,8 +306,8 @@ impl FrictionMemory {
     }
 
     /// How far (m) a body touch point's contact at `site`, starting
-    /// `depth` m inside its obstacle (a fixed one), has its obstacle's
-    /// surface moved in this step: the depth the body did not reach in the cable's or the
+    /// `depth` m inside its obstacle, has its obstacle's surface moved in
+    /// this step: the depth the body did not reach in the cable's or the
     /// island's own solve. A body rapier put into a collider (laid there,
     /// or pushed in, beyond [`SUNK_TOLERANCE`]) does not have that overlap
     /// as elastic energy of the contact's stiff law: its touch points
@@ -316,30 +316,23 @@ impl FrictionMemory {
     /// body comes out. (Taken as elastic, a 30 kg crate laid 5 cm into the
     /// ground under a rope was thrown, the rope 0.7 m up, and the solve
     /// failed, 2026-11-27.)
-    fn sunk(&self, site: Site, depth: f64) -> f64 {
-        let (end, offset) = self.sunk.get(&site).copied().unwrap_or((0.0, 0.0));
+    ///
+    /// Against a moving (kinematic) collider (`fixed` false) only a touch
+    /// point new to the step takes its overlap as an offset (a body rapier
+    /// left in a platform that was rising, when it joins a rope's island);
+    /// a continuing one never adds to its offset: the plane, moved on at
+    /// the obstacle's velocity over the step, misses its acceleration, and
+    /// an offset grown by that let a box sink 3.2 cm into an accelerating
+    /// platform. (With no offset at all against moving colliders, a 20 kg
+    /// box under a rope, which rapier had left 0.28 mm in a platform rising
+    /// at 2 m/s², started its first island step 1.1 mm in it, beyond
+    /// [`GROUNDED_DEPTH`], and the steel contact threw it up at 108 m/s,
+    /// 2026-11-27.)
+    fn sunk(&self, site: Site, depth: f64, fixed: bool) -> f64 {
+        let (end, offset, known) = self.sunk.get(&site).map_or((0.0, 0.0, false), |&(end, offset)| (end, offset, true));
         let grown = depth - end;
-        let added = if grown > SUNK_TOLERANCE { grown } else { 0.0 };
+        let added = if (fixed || !known) && grown > SUNK_TOLERANCE { grown } else { 0.0 };
         (offset + added).min(depth.max(0.0))
-    }
-
-    /// [`FrictionMemory::sunk`] against a moving (kinematic) collider: only
-    /// a touch point new to the step takes its overlap as an offset (a
-    /// body rapier left in a platform that was rising, when it joins a
-    /// rope's island); a continuing one keeps its offset, shrinking as the
-    /// body comes out, and never adds to it: the plane, moved on at the
-    /// obstacle's velocity over the step, misses its acceleration, and an
-    /// offset grown by that would let a body sink into an accelerating
-    /// platform. (Without it, a 20 kg box under a rope, which rapier had
-    /// left 0.28 mm in a platform rising at 2 m/s², started its first
-    /// island step 1.1 mm in it, beyond [`GROUNDED_DEPTH`], and the steel
-    /// contact threw it up at 108 m/s, 2026-11-27.)
-    fn sunk_on_moving(&self, site: Site, depth: f64) -> f64 {
-        match self.sunk.get(&site) {
-            Some(&(_, offset)) => offset.min(depth.max(0.0)),
-            None if depth > SUNK_TOLERANCE => depth,
-            None => 0.0,
-        }
     }
 
     /// The remembered pair touch nearest to `at` (m, world; the midpoint of
@@ -861,10 +854,9 @@ impl BodyTouch {
                     let site = Site::Body { collider: *own, point, obstacle: obstacle.handle };
                     let mut contact = obstacle.contact(hit, *radius, law);
                     // (Against a moving collider only a new touch point's
-                    // overlap: `sunk_on_moving`.)
+                    // overlap: `FrictionMemory::sunk`.)
                     let fixed = obstacle.body.is_none_or(|b| b.is_fixed());
-                    let depth = radius - hit.2;
-                    let offset = if fixed { memory.sunk(site, depth) } else { memory.sunk_on_moving(site, depth) };
+                    let offset = memory.sunk(site, radius - hit.2, fixed);
                     contact.point -= contact.normal * offset;
                     let element = memory.note_sunk(site, contact, mu, 0.0, [co.parent(), Some(self.body)], offset);
                     hits.push(AttachedForce { link: self.link, local_point: self.place.0 + self.place.1 * *q, element: Arc::new(element) });
