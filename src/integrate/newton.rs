@@ -166,7 +166,17 @@ pub const KINK_BAND: f64 = 1e-6;
 /// sub-steps.
 pub const PATIENT_BUDGET: usize = 4;
 
+/// Exact Newton iterations a solve may still take after a correction
+/// solved with the tangent's fallback came within the tolerance.
+pub(crate) const FINISHING_ITERATIONS: usize = 4;
+
 /// Newton iterations on the current (frozen) laws.
+///
+/// A correction solved with the tangent's fallback
+/// ([`SecondOrderSystem::tangent_fell_back`]) never ends the solve: once
+/// one is within the tolerance, the fallback is switched off for the rest
+/// of the solve, and only an exact Newton correction within the tolerance
+/// is accepted.
 fn iterate<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     ws: &mut Workspace,
@@ -174,6 +184,25 @@ fn iterate<S: SecondOrderSystem + ?Sized>(
     settings: &NewtonSettings,
     one_shot: bool,
     stats: &mut StepStats,
+) -> Result<(), Failure> {
+    let mut finishing = false;
+    let result = iterate_exactly(sys, ws, map, settings, one_shot, stats, &mut finishing);
+    if finishing {
+        sys.set_definite_tangent(true);
+    }
+    result
+}
+
+/// [`iterate`]'s loop; `finishing` is set when it switched the fallback
+/// off (the caller switches it on again).
+fn iterate_exactly<S: SecondOrderSystem + ?Sized>(
+    sys: &mut S,
+    ws: &mut Workspace,
+    map: Affine,
+    settings: &NewtonSettings,
+    one_shot: bool,
+    stats: &mut StepStats,
+    finishing: &mut bool,
 ) -> Result<(), Failure> {
     let Affine { t, c_q, c_v, h } = map;
     let tol = sys.position_tolerance();
@@ -186,10 +215,12 @@ fn iterate<S: SecondOrderSystem + ?Sized>(
     // A patient system's solve continues past `max_iterations` while each
     // correction is within twice the smallest so far (squared norms).
     let patient = !one_shot && sys.patient_newton();
-    let limit = if patient { PATIENT_BUDGET * max_iterations } else { max_iterations };
+    let mut limit = if patient { PATIENT_BUDGET * max_iterations } else { max_iterations };
     let mut least_size = f64::INFINITY;
     let mut done = 0;
-    for iteration in 1..=limit {
+    let mut iteration = 0;
+    while iteration < limit {
+        iteration += 1;
         done = iteration;
         update_coordinates(ws, c_q, c_v);
         pass(sys, ws, map, stats)?;
@@ -236,6 +267,14 @@ fn iterate<S: SecondOrderSystem + ?Sized>(
             if dq > tol + rel * ws.q[i].abs() || dv > vel_tol + rel * ws.v[i].abs() {
                 converged = false;
             }
+        }
+        if converged && !one_shot && sys.tangent_fell_back() {
+            // Not a Newton step: finish with the exact tangent.
+            converged = false;
+            *finishing = true;
+            sys.set_definite_tangent(false);
+            // Room for the exact corrections (quadratic from here).
+            limit = limit.max(iteration + FINISHING_ITERATIONS);
         }
         // A correction within the tolerance gains nothing from the
         // system's own update (its second-order part is smaller still).

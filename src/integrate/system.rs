@@ -188,6 +188,18 @@ pub trait SecondOrderSystem {
     /// solve failed, so steps that converge with the exact tangent are
     /// unchanged. Default: no fallback (nothing to switch).
     fn set_definite_tangent(&mut self, _on: bool) {}
+
+    /// Whether the last correction
+    /// ([`residual_and_correction`](Self::residual_and_correction)) was
+    /// solved with the fallback of
+    /// [`set_definite_tangent`](Self::set_definite_tangent) instead of the
+    /// exact tangent. Such a correction is not a Newton step: where the
+    /// exact tangent is nearly singular it is much smaller than the
+    /// iterate's error, so Newton does not take it as a sign of
+    /// convergence (it finishes with exact corrections). Default `false`.
+    fn tangent_fell_back(&self) -> bool {
+        false
+    }
 }
 
 /// How far the fast preset's single linearised solve may go before its

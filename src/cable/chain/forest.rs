@@ -423,6 +423,9 @@ impl SecondOrderSystem for Forest<'_> {
     fn set_definite_tangent(&mut self, on: bool) {
         self.chains.iter_mut().for_each(|c| c.use_definite_tangent(on));
     }
+    fn tangent_fell_back(&self) -> bool {
+        self.chains.iter().any(|c| c.fell_back())
+    }
     fn nonlinear_update(&mut self, q: &[f64], dx: &[f64], scale: f64, out: &mut [f64]) -> bool {
         let mut any = false;
         for ((chain, w), ok) in self.chains.iter_mut().zip(self.offsets.windows(2)).zip(split_parts(&self.offsets, out)) {

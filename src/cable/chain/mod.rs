@@ -186,6 +186,9 @@ pub struct Chain {
     /// The elimination leaves the geometric stiffness out (set only while
     /// an indefinite tangent is solved again).
     without_geometric: bool,
+    /// The last correction (fused pass or [`Chain::solve_into`]) was
+    /// solved without the geometric stiffness: it is not a Newton step.
+    fell_back: bool,
     /// Set during a static solve: rotation-spring blocks then carry only
     /// their law's Gauss–Newton part (positive semi-definite: the static
     /// solve minimises the energy).
@@ -241,6 +244,7 @@ impl Chain {
             indefinite: false,
             definite_tangent: false,
             without_geometric: false,
+            fell_back: false,
             law_gauss_newton: false,
         }
     }

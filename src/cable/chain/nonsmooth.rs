@@ -44,6 +44,9 @@ impl SecondOrderSystem for Chain {
     fn set_definite_tangent(&mut self, on: bool) {
         self.use_definite_tangent(on);
     }
+    fn tangent_fell_back(&self) -> bool {
+        self.fell_back()
+    }
     fn position_tolerance(&self) -> f64 {
         self.position_tolerance
     }

@@ -269,10 +269,18 @@ impl Chain {
     /// The tree's solve with the geometric stiffness left out:
     /// `(M + c_v C + c_q K) x = b`.
     fn solve_without_geometric(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
+        self.fell_back = true;
         self.without_geometric = true;
         let solved = self.solve_tree(c_v, c_q, b, x);
         self.without_geometric = false;
         solved
+    }
+
+    /// Whether the last correction was solved without the geometric
+    /// stiffness (the fallback for an indefinite tangent): it is not a
+    /// Newton step ([`SecondOrderSystem::tangent_fell_back`](crate::integrate::SecondOrderSystem::tangent_fell_back)).
+    pub(crate) fn fell_back(&self) -> bool {
+        self.fell_back
     }
 
     /// Turns the fallback for indefinite tangents on or off (see
@@ -326,6 +334,7 @@ impl Chain {
     /// elements, then the tip-to-base sweep.
     pub(super) fn sweep_loads(&mut self, t: f64, r: &mut [f64], solve: Option<(f64, f64)>) -> Result<(), SystemError> {
         self.indefinite = false;
+        self.fell_back = false;
         let n = self.joints.len();
         for ld in &self.loads {
             let ps = &self.poses[ld.link];
@@ -468,6 +477,7 @@ impl Chain {
     /// converging solves pass through indefinite iterates (a rope struck by
     /// a body, a compressed rod) and need the exact tangent there.
     pub fn solve_into(&mut self, c_v: f64, c_q: f64, b: &[f64], x: &mut [f64]) -> Result<(), SystemError> {
+        self.fell_back = false;
         self.solve_tree(c_v, c_q, b, x)?;
         self.pair_correction(c_v, c_q, x)
     }
