@@ -377,3 +377,58 @@ fn rope_force_acts_on_a_body_rapier_keeps() {
     assert!((x - x_ref).abs() < 0.01 * delta, "position {x} vs {x_ref}");
     assert!((sim.cable.nodes()[0].x - x).abs() < 1e-3 * delta);
 }
+
+/// A hook on a kinematic rapier body lifts a 1 t payload: at rest for 1 s,
+/// then accelerating upward at a = 1 m/s², moved by its `Transform`
+/// (position-based: the cable reads the velocity rapier derives from the
+/// poses the user sets) or by its `Velocity` (velocity-based). Once
+/// lifting, the rope's top carries `(M + ρL)(g + a)` on average (the
+/// acceleration's onset rings the axial mode, period about 0.17 s, which
+/// the 1.5 s mean averages out); read the hook's motion a frame late or
+/// not at all and the top carries `(M + ρL) g`, 9 % less.
+#[test]
+fn a_kinematic_hook_accelerating_up_lifts_its_payload_at_m_g_plus_a() {
+    let (a, length) = (1.0f32, 9.7f32);
+    let material = RopeMaterial::steel_6x36_iwrc(0.02);
+    let hanging = 1000.0 + material.section().linear_density * f64::from(length);
+    let expected = hanging * (9.81 + f64::from(a));
+    for position_based in [true, false] {
+        let mut app = app();
+        let w = app.world_mut();
+        let kind = if position_based { RigidBody::KinematicPositionBased } else { RigidBody::KinematicVelocityBased };
+        let hook = w.spawn((kind, Transform::from_xyz(0.0, 10.0, 0.0), Collider::ball(0.1), Velocity::zero())).id();
+        let payload =
+            w.spawn((RigidBody::Dynamic, Collider::cuboid(0.3, 0.3, 0.3), ColliderMassProperties::Mass(1000.0), Velocity::zero(), Transform::default())).id();
+        let rope = w
+            .spawn(
+                CableDescriptor::new(length)
+                    .material(material.clone())
+                    .segments(20)
+                    .start(CableAnchor::body(hook, Vec3::ZERO))
+                    .end(CableAnchor::body(payload, Vec3::new(0.0, 0.3, 0.0))),
+            )
+            .id();
+        let mut tensions = Vec::new();
+        for k in 1..=180 {
+            let t = (k as f32 - 60.0).max(0.0) * DT;
+            if position_based {
+                app.world_mut().get_mut::<Transform>(hook).unwrap().translation.y = 10.0 + 0.5 * a * t * t;
+            } else {
+                app.world_mut().get_mut::<Velocity>(hook).unwrap().linear.y = a * t;
+            }
+            app.update();
+            let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+            assert!(errors.is_empty(), "{errors:?}");
+            // (The cable is built at the first fixed step.)
+            if let Some(state) = app.world().get::<CableState>(rope) {
+                tensions.push(f64::from(state.tensions[0]));
+            }
+        }
+        assert!(tensions.len() >= 178, "the cable ran {} of 180 frames", tensions.len());
+        let late = &tensions[tensions.len() - 90..];
+        let mean = late.iter().sum::<f64>() / late.len() as f64;
+        let err = mean / expected - 1.0;
+        println!("position-based {position_based}: mean top tension over 1.5–3 s {mean:.1} N, (M + ρL)(g + a) = {expected:.1} N ({err:+.2e})");
+        assert!(err.abs() < 2e-3, "top tension {mean} N against {expected} N");
+    }
+}
