@@ -402,7 +402,7 @@ fn a_kinematic_hook_accelerating_up_lifts_its_payload_at_m_g_plus_a() {
         let rope = w
             .spawn(
                 CableDescriptor::new(length)
-                    .material(material.clone())
+                    .material(material)
                     .segments(20)
                     .start(CableAnchor::body(hook, Vec3::ZERO))
                     .end(CableAnchor::body(payload, Vec3::new(0.0, 0.3, 0.0))),
