@@ -407,3 +407,77 @@ fn a_carried_box_on_the_ground_sticks_under_a_small_push_and_slides_under_a_larg
     assert!(crept.abs() < 1e-6, "crept {crept} m under 0.3 m g");
     assert!((a / expected - 1.0).abs() < 0.02, "slid at {a} m/s², expected {expected}");
 }
+
+/// A car towing a trailer (a newcomer's tow line): two 500 kg boxes on a
+/// fixed ground (friction 0.5), joined by 6 m of 12 mm steel rope laid
+/// taut between them (damped, τ = 0.01 s, so the pull's onset rings out);
+/// a constant `ExternalForce` F = 8 kN pushes the car from 0.5 s. A dynamic
+/// body on one cable alone, with no joint, is carried at either end: the
+/// car at the rope's start is the chain's floating root
+/// (`RopeStart::FloatingBody`), the trailer at its end, both in the one
+/// implicit solve, their corners' contacts with the ground in it too. Both
+/// slide, and the rope's weight hangs on the two (half on each, adding to
+/// their friction): `a = (F − μ (m₁ + m₂ + ρL) g) / (m₁ + m₂ + ρL)`, and
+/// the rope pulls the trailer with `T = m₂ a + μ (m₂ + ρL/2) g`. Before, the car was coupled
+/// explicitly (`k h²/m` = 7 at 1/60 s) and the cable stopped as soon as
+/// the rope pulled.
+#[test]
+fn a_car_towing_a_trailer_on_a_rope_pulls_it_at_the_closed_form_tension() {
+    let mut app = app();
+    let (m, mu, force, length) = (500.0f32, 0.5f64, 8000.0f32, 6.0f32);
+    let material = RopeMaterial::steel_6x36_iwrc(0.012);
+    let w = app.world_mut();
+    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(100.0, 0.5, 10.0)));
+    let body = |x: f32| {
+        (
+            RigidBody::Dynamic,
+            Collider::cuboid(1.0, 0.4, 0.6),
+            ColliderMassProperties::Mass(m),
+            Friction::coefficient(mu as f32),
+            Velocity::zero(),
+            Transform::from_xyz(x, 0.4, 0.0),
+        )
+    };
+    let car = w.spawn((body(0.0), ExternalForce::default())).id();
+    let trailer = w.spawn(body(-(2.0 + length))).id();
+    let cable = w
+        .spawn(
+            CableDescriptor::new(length)
+                .material(material)
+                .damping(0.01)
+                .start(CableAnchor::body(car, Vec3::new(-1.0, -0.2, 0.0)))
+                .end(CableAnchor::body(trailer, Vec3::new(1.0, -0.2, 0.0))),
+        )
+        .id();
+    let (m, g) = (f64::from(m), 9.81);
+    let rope = material.section().linear_density * f64::from(length);
+    let a = (f64::from(force) - mu * (2.0 * m + rope) * g) / (2.0 * m + rope);
+    let expected = m * a + mu * (m + 0.5 * rope) * g;
+    let mut rows = Vec::new();
+    for frame in 1..=150 {
+        if frame == 30 {
+            app.world_mut().get_mut::<ExternalForce>(car).unwrap().force = Vec3::new(force, 0.0, 0.0);
+        }
+        app.update();
+        let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+        assert!(errors.is_empty(), "{errors:?}");
+        if let Some(s) = app.world().get::<CableState>(cable) {
+            let v = |e: Entity| f64::from(app.world().get::<Velocity>(e).unwrap().linear.x);
+            rows.push((s.time, f64::from(*s.tensions.last().unwrap()), v(car), v(trailer)));
+        }
+    }
+    // The last second: the tension at the trailer and the acceleration on
+    // the closed form.
+    let (t, tension, v_car, v_trailer) = *rows.last().unwrap();
+    let first = rows.iter().position(|r| r.0 > t - 1.0 - 1e-9).unwrap() - 1;
+    let (t0, _, v_car0, v_trailer0) = rows[first];
+    let late = &rows[first + 1..];
+    let mean = late.iter().map(|r| r.1).sum::<f64>() / late.len() as f64;
+    let (a_car, a_trailer) = ((v_car - v_car0) / (t - t0), (v_trailer - v_trailer0) / (t - t0));
+    println!(
+        "t = {t:.3} s: tension at the trailer {tension:.1} N (last second's mean {mean:.1} N), T = m₂a + μ(m₂ + ρL/2)g = {expected:.1} N; \
+         acceleration over it: car {a_car:.4}, trailer {a_trailer:.4} m/s², a = {a:.4} m/s²"
+    );
+    assert!((mean / expected - 1.0).abs() < 2e-3, "tension {mean} N against {expected} N");
+    assert!((a_car / a - 1.0).abs() < 2e-3 && (a_trailer / a - 1.0).abs() < 2e-3, "accelerations {a_car}, {a_trailer} against {a}");
+}

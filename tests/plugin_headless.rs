@@ -322,12 +322,16 @@ fn cable_follows_a_kinematic_body() {
     assert!((p.y + 0.2).abs() < 0.05, "the payload hangs 10.2 m below the tip: y = {}", p.y);
 }
 
-/// A body rapier keeps (dynamic, not carried by the cable) receives the
-/// rope's force every step: in zero gravity a 100 kg body at the start of a
-/// rope pre-stretched by δ = 0.1 m toward a fixed anchor is pulled like a
-/// mass on a spring k = EA/L, x(t) = δ(1 − cos ωt), v(t) = δω sin ωt.
+/// A free body at a rope's start is pulled by it: in zero gravity a 100 kg
+/// body at the start of a rope pre-stretched by δ = 0.1 m toward a fixed
+/// anchor moves like a mass on a spring k = EA/L, x(t) = δ(1 − cos ωt),
+/// v(t) = δω sin ωt. Since 2026-11-28 such a body (dynamic, on this cable
+/// alone, no joint) is the chain's floating root, inside the cable's
+/// implicit solve; before, it was coupled explicitly (the rope's force an
+/// impulse each step, a step late), and the velocity was off by up to
+/// 4.0e-2 δω; now 1.2e-3.
 #[test]
-fn rope_force_acts_on_a_body_rapier_keeps() {
+fn a_free_body_at_a_rope_start_is_pulled_like_a_mass_on_a_spring() {
     let mut app = app();
     app.update();
     for mut cfg in app.world_mut().query::<&mut RapierConfiguration>().iter_mut(app.world_mut()) {
@@ -370,11 +374,9 @@ fn rope_force_acts_on_a_body_rapier_keeps() {
         sim.cable.nodes()[0].x
     );
     assert!(!sim.failed);
-    // Explicit exchange lags one step: a phase error of about ωh.
-    let h = DT as f64;
-    assert!(worst < 1.5 * omega * h, "velocity error {worst} vs ωh = {}", omega * h);
+    assert!(worst < 5e-3, "velocity error {worst} of δω");
     let x_ref = delta * (1.0 - (omega * t).cos());
-    assert!((x - x_ref).abs() < 0.01 * delta, "position {x} vs {x_ref}");
+    assert!((x - x_ref).abs() < 5e-3 * delta, "position {x} vs {x_ref}");
     assert!((sim.cable.nodes()[0].x - x).abs() < 1e-3 * delta);
 }
 

@@ -174,10 +174,8 @@ impl Cable {
         // kinematics are current. Other schemes last evaluated an
         // intermediate stage.
         let current = self.integrator.evaluated_at_end() && stats.substeps_used == 1;
-        if self.model.layout.free_start {
-            self.rechart_free_start()?;
-        }
-        if !current || self.model.layout.free_start {
+        let recharted = self.rechart()?;
+        if !current || recharted {
             self.refresh();
         }
         Ok(stats)
@@ -295,9 +293,7 @@ impl Cable {
             c.last_stats = stats;
             c.total_stats += stats;
             c.steps += 1;
-            if c.model.layout.free_start {
-                c.rechart_free_start()?;
-            }
+            c.rechart()?;
             c.refresh();
         }
         for b in bodies.iter_mut() {
@@ -330,14 +326,28 @@ impl Cable {
         let _ = self.model.chain.residual_into(s.t, &s.q, &s.v, &s.a, &mut r);
     }
 
-    /// Re-charts the floating first element when its middle Euler angle
-    /// passes 1 rad: folds its three rotation angles into the constant frame
-    /// rotation, maps their rates to the new, zero angles and recomputes a
-    /// consistent acceleration, so the angles never approach their
-    /// singularity however the rope tumbles.
-    fn rechart_free_start(&mut self) -> Result<(), CableError> {
+    /// Re-charts the floating rotations of a free start (its first
+    /// element) or of a floating start body
+    /// ([`RopeStart::FloatingBody`](crate::cable::RopeStart::FloatingBody)),
+    /// so their Euler angles never approach their singularity however the
+    /// rope tumbles ([`Cable::rechart_rotations`]); answers whether the
+    /// rope has such rotations (its readouts are then refreshed).
+    fn rechart(&mut self) -> Result<bool, CableError> {
         let l = self.model.layout;
-        let s0 = l.dof(0, 3);
+        if l.free_start {
+            self.rechart_rotations(l.dof(0, 3))?;
+        }
+        if l.floating_start {
+            self.rechart_rotations(crate::cable::rope::FLOATING_BODY_LINK - 2)?;
+        }
+        Ok(l.free_start || l.floating_start)
+    }
+
+    /// Once the middle of the three Euler angles at sub-joints `s0`,
+    /// `s0 + 1`, `s0 + 2` (about z, y, x) passes 1 rad: folds them into the
+    /// first one's constant frame rotation, maps their rates to the new,
+    /// zero angles and recomputes a consistent acceleration.
+    fn rechart_rotations(&mut self, s0: usize) -> Result<(), CableError> {
         if self.state.q[s0 + 1].abs() < 1.0 {
             return Ok(());
         }

@@ -117,7 +117,24 @@ pub enum RopeStart {
         /// Whether the rope is clamped (else pinned) to the body.
         clamp: bool,
     },
+    /// Held by a free body (a car towing on the rope, a buoy): the body is
+    /// the chain's floating root, its six coordinates three slides along
+    /// the axes of its initial frame and three rotations, re-charted after
+    /// every step so the angles never approach their singularity (as a
+    /// [`Free`](Self::Free) start's).
+    FloatingBody {
+        /// The body.
+        body: LumpedBody,
+        /// Rope attachment point in the body frame, m.
+        anchor: DVec3,
+        /// Whether the rope is clamped (else pinned) to the body.
+        clamp: bool,
+    },
 }
+
+/// Sub-joint whose link is a [`RopeStart::FloatingBody`] (its rotations
+/// are the sub-joints 3, 4 and 5).
+pub const FLOATING_BODY_LINK: usize = 5;
 
 /// How the rope's end is held.
 #[derive(Clone)]
@@ -195,6 +212,10 @@ pub struct RopeLayout {
     /// The first element floats (free start): its six sub-joints are three
     /// world slides and three rotations, not an elastic joint.
     pub free_start: bool,
+    /// The chain's root is a free body ([`RopeStart::FloatingBody`]): its
+    /// six sub-joints (three slides, three rotations) come before the
+    /// first element.
+    pub floating_start: bool,
 }
 
 /// Where a lumped body sits in a chain: the link that carries it and the
@@ -392,7 +413,7 @@ impl RopeBuilder {
     fn start_point(&self) -> DVec3 {
         match &self.start {
             RopeStart::Pinned(b) | RopeStart::Clamped(b) => b.at(0.0).position,
-            RopeStart::SlidingBody { body, anchor, .. } => body.position + body.rotation * *anchor,
+            RopeStart::SlidingBody { body, anchor, .. } | RopeStart::FloatingBody { body, anchor, .. } => body.position + body.rotation * *anchor,
             RopeStart::Free => self.path.as_ref().and_then(|p| p.first().copied()).unwrap_or(DVec3::ZERO),
         }
     }
@@ -431,6 +452,12 @@ impl RopeBuilder {
                             value: axis.length(),
                             reason: "must be finite, the axis non-zero",
                         });
+                    }
+                    Some(("start body", body))
+                }
+                RopeStart::FloatingBody { body, anchor, .. } => {
+                    if !anchor.is_finite() {
+                        return Err(RopeError::InvalidParameter { name: "start anchor", value: f64::NAN, reason: "not finite" });
                     }
                     Some(("start body", body))
                 }
@@ -560,6 +587,21 @@ impl RopeBuilder {
                 q0.push(0.0);
                 (base, *clamp, body.rotation, *anchor, Some(BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }))
             }
+            RopeStart::FloatingBody { body, anchor, clamp } => {
+                // The body's initial frame is the base; three slides along
+                // its axes, then three rotations, the last carrying it.
+                let base = BaseMotion::Fixed(BaseState::fixed(body.rotation, body.position));
+                joints.extend([
+                    spring(JointKind::Prismatic, DVec3::X, 0.0, None),
+                    spring(JointKind::Prismatic, DVec3::Y, 0.0, None),
+                    spring(JointKind::Prismatic, DVec3::Z, 0.0, None),
+                    spring(JointKind::Revolute, DVec3::Z, 0.0, None),
+                    spring(JointKind::Revolute, DVec3::Y, 0.0, None),
+                    spring(JointKind::Revolute, DVec3::X, 0.0, Some(LinkMass::new(body.mass, body.com, body.inertia))),
+                ]);
+                q0.extend([0.0; 6]);
+                (base, *clamp, body.rotation, *anchor, Some(BodyInChain { link: FLOATING_BODY_LINK, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }))
+            }
             RopeStart::Free => (BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, start)), false, DMat3::IDENTITY, DVec3::ZERO, None),
         };
         let first = joints.len();
@@ -686,7 +728,8 @@ impl RopeBuilder {
         *chain.anchors_mut() = anchors;
         *chain.rotation_springs_mut() = rotation_springs;
         chain.max_frequency = Some(omega2.sqrt());
-        let layout = RopeLayout { elements: n, element_length: le, first, start_body, end_body, free_start };
+        let floating_start = matches!(self.start, RopeStart::FloatingBody { .. });
+        let layout = RopeLayout { elements: n, element_length: le, first, start_body, end_body, free_start, floating_start };
         let zeros = vec![0.0; q0.len()];
         let mut r = vec![0.0; q0.len()];
         chain.residual_into(0.0, &q0, &zeros, &zeros, &mut r).map_err(|e| RopeError::InvalidPath(format!("initial state: {e}")))?;

@@ -18,7 +18,9 @@
 //!   the end of exactly one cable and at no other cable end, that no
 //!   impulse joint holds (hook, payload); or a dynamic body at the start of
 //!   exactly one cable and at no other cable end whose only joint is one
-//!   prismatic joint to a fixed body (a trolley on its rail). It is a link
+//!   prismatic joint to a fixed body (a trolley on its rail), or that no
+//!   joint holds (a car towing on the rope: the chain's floating root,
+//!   [`RopeStart::FloatingBody`]). It is a link
 //!   of that cable's chain, solved implicitly with the rope (a 10 t payload
 //!   on a 0.3 kg element is as stable as the rope itself). **It stays a
 //!   dynamic rapier body**: its body type is never changed and its
@@ -71,7 +73,7 @@
 //!   the cable reads the motion exactly; otherwise it samples rapier (pose,
 //!   velocity, and the velocity change over the last step).
 //! * **Explicit** ([`Role::Explicit`]): every other dynamic body (held by
-//!   joints, only at cable starts, or added to a body an existing cable
+//!   joints, only at several cable starts, or added to a body an existing cable
 //!   couples explicitly). The cable end follows the body's sampled motion;
 //!   the body gets the cable's reaction as an impulse every step.
 //!   Stable roughly while `k·h²/m ≲ 1` with `k = EA/L_e` (see
@@ -90,6 +92,7 @@ pub(crate) use self::explicit::set_velocity_drive;
 #[cfg(feature = "sim")]
 pub(crate) use self::explicit::velocity_drive_motor;
 use crate::cable::chain::rotation_vector;
+use crate::cable::rope::FLOATING_BODY_LINK;
 use crate::cable::{
     BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeModel, RopeStart,
 };
@@ -576,7 +579,9 @@ pub fn classify(
                 } else {
                     let attached: Vec<_> = joints.attached_joints(*body).collect();
                     match (k, attached.as_slice()) {
-                        (1, []) => Role::Carried,
+                        // At either end: a payload at its end, a car towing
+                        // on its start (the chain's floating root).
+                        (_, []) => Role::Carried,
                         (0, [(b1, b2, jh, j)]) => {
                             let other = if *b1 == *body { *b2 } else { *b1 };
                             let prismatic = j.data.locked_axes == rp::JointAxesMask::LOCKED_PRISMATIC_AXES;
@@ -933,6 +938,9 @@ fn draft(spec: &CableSpec, roles: EndRoles, bodies: &rp::RigidBodySet, motions: 
             if let Role::Trolley { axis, .. } = role {
                 carried.push((body, 0, BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
                 rope.start(RopeStart::SlidingBody { body: spec.exact[0].unwrap_or_else(|| lumped_of(rb)), axis, anchor, clamp })
+            } else if role == Role::Carried {
+                carried.push((body, 0, BodyInChain { link: FLOATING_BODY_LINK, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
+                rope.start(RopeStart::FloatingBody { body: spec.exact[0].unwrap_or_else(|| lumped_of(rb)), anchor, clamp })
             } else {
                 let b = base_motion(body, anchor, true, rb, motions, &mut followers);
                 rope.start(held_start(b, clamp))

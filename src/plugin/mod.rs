@@ -45,6 +45,9 @@
 //!   the cable's link, so rope and body take them together. `LockedAxes`
 //!   on it are refused (a [`CableError`] message at creation). Its
 //!   `Transform` and `Velocity` are the cable's after every step.
+//! * A **dynamic body that no joint holds at a cable's start** (a car
+//!   towing a trailer on the rope), on that cable alone, is carried in the
+//!   same way, as the chain's floating root.
 //! * A **dynamic body on a prismatic joint** to a fixed body at a cable's
 //!   start (a trolley on its rail) becomes a prismatic link of the chain in
 //!   the same way; the joint's rapier motor
