@@ -79,7 +79,8 @@
 //! * Any **other dynamic body** (one rapier keeps: joint graphs, a body on
 //!   several cables' starts only) gets the end force as an impulse each step
 //!   (explicit exchange; stable while `k·h²/m` stays below ~1, with `k =
-//!   EA/L_e`). Cables spawned in the same step are classified together. A
+//!   EA/L_e`; above 1 a warning is logged when the cable is created, with
+//!   the coupled sub-steps that would bring it to 1). Cables spawned in the same step are classified together. A
 //!   cable spawned later on a body another cable already carries is
 //!   refused.
 //!

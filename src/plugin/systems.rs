@@ -240,6 +240,22 @@ pub(crate) fn init_cables(
             continue;
         }
         let Some(cc) = sims[k].take() else { continue };
+        // An explicit exchange that is likely unstable at this step: said
+        // once, at creation (`cablesim` warns the same way).
+        let exchange = settings.step.unwrap_or(match mode.as_deref() {
+            Some(TimestepMode::Fixed { dt, substeps }) => f64::from(*dt) / f64::from((*substeps).max(1) as u32),
+            _ => 1.0 / 60.0,
+        });
+        for (body, start, ratio) in cc.explicit_ratios(&ctx.rigidbody_set.bodies, exchange) {
+            if ratio > 1.0 {
+                let who = ends.iter().flatten().find(|(_, h)| *h == body).map_or_else(|| format!("{body:?}"), |(e, _)| format!("{e}"));
+                log::warn!(
+                    "cable {entity}: its {} on body {who} is coupled explicitly (the body is held by joints, or on several cables' starts) with k·h²/m = {ratio:.2e} > 1 (k = EA/L_e, h = {exchange} s): it may be unstable; coupled sub-steps (`CablePlugin::with_coupled_substeps({})`) bring it to 1",
+                    if start { "start" } else { "end" },
+                    ratio.sqrt().ceil()
+                );
+            }
+        }
         let mut carried = Vec::new();
         let mut rail = None;
         for (i, (be, h)) in ends.iter().enumerate().filter_map(|(i, e)| e.map(|e| (i, e))) {

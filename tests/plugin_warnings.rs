@@ -1,0 +1,71 @@
+//! Warnings the plugin logs at a cable's creation (this file installs its
+//! own logger, so it is its own test binary).
+
+#[path = "common/plugin_app.rs"]
+mod plugin_app;
+use bevy::prelude::*;
+use bevy_rapier3d::prelude::*;
+use bevy_rapier_cable::cable::RopeMaterial;
+use bevy_rapier_cable::plugin::*;
+use std::sync::Mutex;
+
+static LOGGED: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+struct Capture;
+
+impl log::Log for Capture {
+    fn enabled(&self, m: &log::Metadata) -> bool {
+        m.level() <= log::Level::Warn
+    }
+    fn log(&self, r: &log::Record) {
+        if self.enabled(r.metadata()) {
+            LOGGED.lock().unwrap().push(format!("{}: {}", r.level(), r.args()));
+        }
+    }
+    fn flush(&self) {}
+}
+
+/// A 10 kg body held by a revolute joint (so rapier keeps it) at the start
+/// of 10 m of 20 mm steel rope: the cable couples it explicitly, with
+/// `k h²/m` ≈ 1 000 at 1/60 s. The plugin says so once, at creation, with
+/// the number of coupled sub-steps that would bring it to 1, as `cablesim`
+/// does; a payload the cable carries gets no such warning.
+#[test]
+fn an_explicit_coupling_likely_unstable_is_warned_at_creation() {
+    log::set_boxed_logger(Box::new(Capture)).unwrap();
+    log::set_max_level(log::LevelFilter::Warn);
+    let mut app = plugin_app::headless_app(1.0 / 60.0);
+    let w = app.world_mut();
+    let post = w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, 10.0, 0.0))).id();
+    let arm = w
+        .spawn((
+            RigidBody::Dynamic,
+            Transform::from_xyz(1.0, 10.0, 0.0),
+            Collider::ball(0.1),
+            ColliderMassProperties::Mass(10.0),
+            ImpulseJoint::new(post, RevoluteJointBuilder::new(Vec3::Z).local_anchor1(Vec3::new(1.0, 0.0, 0.0))),
+        ))
+        .id();
+    let payload = w.spawn((RigidBody::Dynamic, Transform::from_xyz(1.0, -0.3, 0.0), Collider::ball(0.3), ColliderMassProperties::Mass(100.0))).id();
+    w.spawn(
+        CableDescriptor::new(10.0)
+            .material(RopeMaterial::steel_6x36_iwrc(0.02))
+            .start(CableAnchor::body(arm, Vec3::ZERO))
+            .end(CableAnchor::body(payload, Vec3::Y * 0.3)),
+    );
+    for _ in 0..3 {
+        app.update();
+    }
+    let logged = LOGGED.lock().unwrap().clone();
+    println!("{logged:#?}");
+    let warned: Vec<&String> = logged.iter().filter(|l| l.contains("coupled explicitly")).collect();
+    assert_eq!(warned.len(), 1, "{logged:?}");
+    assert!(
+        warned[0].starts_with("WARN")
+            && warned[0].contains("its start on body")
+            && warned[0].contains("k·h²/m")
+            && warned[0].contains("with_coupled_substeps("),
+        "{}",
+        warned[0]
+    );
+}
