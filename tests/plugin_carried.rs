@@ -481,3 +481,35 @@ fn a_car_towing_a_trailer_on_a_rope_pulls_it_at_the_closed_form_tension() {
     assert!((mean / expected - 1.0).abs() < 2e-3, "tension {mean} N against {expected} N");
     assert!((a_car / a - 1.0).abs() < 2e-3 && (a_trailer / a - 1.0).abs() < 2e-3, "accelerations {a_car}, {a_trailer} against {a}");
 }
+
+/// A free body at a rope's start is carried as the chain's floating root,
+/// but one with `LockedAxes` (a game's car kept upright) stays coupled
+/// explicitly, as before the floating root existed, instead of being
+/// refused as a carried body's locked axes are.
+#[test]
+fn a_body_with_locked_axes_at_a_rope_start_stays_explicit() {
+    for (locked, expect_carried) in [(LockedAxes::empty(), true), (LockedAxes::ROTATION_LOCKED, false)] {
+        let mut app = app();
+        let w = app.world_mut();
+        let car = w
+            .spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, 0.0, 0.0), Collider::ball(0.3), ColliderMassProperties::Mass(100.0), Velocity::zero(), locked))
+            .id();
+        let cable = w
+            .spawn(
+                CableDescriptor::new(5.0)
+                    .material(RopeMaterial::steel_6x36_iwrc(0.02))
+                    .start(CableAnchor::body(car, Vec3::ZERO))
+                    .end(CableAnchor::world(Vec3::new(0.0, 5.0, 0.0))),
+            )
+            .id();
+        for _ in 0..3 {
+            app.update();
+            let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+            assert!(errors.is_empty(), "{errors:?}");
+        }
+        let sim = app.world().get::<CableSim>(cable).expect("cable built");
+        let carried = sim.bodies.iter().any(|(e, b)| *e == car && matches!(b, CarriedBody::Lumped(_)));
+        println!("locked axes {locked:?}: carried {carried}");
+        assert_eq!(carried, expect_carried);
+    }
+}

@@ -19,8 +19,8 @@
 //!   impulse joint holds (hook, payload); or a dynamic body at the start of
 //!   exactly one cable and at no other cable end whose only joint is one
 //!   prismatic joint to a fixed body (a trolley on its rail), or that no
-//!   joint holds (a car towing on the rope: the chain's floating root,
-//!   [`RopeStart::FloatingBody`]). It is a link
+//!   joint holds and whose axes are not locked (a car towing on the rope:
+//!   the chain's floating root, [`RopeStart::FloatingBody`]). It is a link
 //!   of that cable's chain, solved implicitly with the rope (a 10 t payload
 //!   on a 0.3 kg element is as stable as the rope itself). **It stays a
 //!   dynamic rapier body**: its body type is never changed and its
@@ -579,9 +579,13 @@ pub fn classify(
                 } else {
                     let attached: Vec<_> = joints.attached_joints(*body).collect();
                     match (k, attached.as_slice()) {
-                        // At either end: a payload at its end, a car towing
-                        // on its start (the chain's floating root).
-                        (_, []) => Role::Carried,
+                        // A payload at its end; a car towing on its start
+                        // (the chain's floating root) unless its axes are
+                        // locked (kept explicit, as before: a carried body's
+                        // locked axes are refused, and a game's vehicle
+                        // often has them).
+                        (1, []) => Role::Carried,
+                        (0, []) if rb.locked_axes().is_empty() => Role::Carried,
                         (0, [(b1, b2, jh, j)]) => {
                             let other = if *b1 == *body { *b2 } else { *b1 };
                             let prismatic = j.data.locked_axes == rp::JointAxesMask::LOCKED_PRISMATIC_AXES;
