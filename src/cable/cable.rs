@@ -388,8 +388,8 @@ impl Cable {
         for i in usize::from(l.free_start)..l.elements {
             let s = l.dof(i, 3);
             let gap = self.state.q[s];
-            // A tension-only (slack) element may shorten freely, through
-            // zero length, but not turn inside out beyond its own length
+            // A tension-only (slack) element may shorten (to its stop, or
+            // past it within a step), but not turn inside out beyond its own length
             // (`gap < −2 L_e`): it would then be a stretched element that
             // its law (written for the slide's sign) takes as slack and lets
             // lengthen without force.

@@ -13,7 +13,7 @@ pub use self::chain::{
     SpringLaw, StaticError, SubJoint,
 };
 pub mod rope;
-pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeLayout, RopeModel, RopePart, RopeStart, MAX_SEGMENTS};
+pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeLayout, RopeModel, RopePart, RopeStart, MAX_SEGMENTS, SLACK_STOP};
 #[allow(clippy::module_inception)]
 pub mod cable;
 #[cfg(test)]

@@ -169,6 +169,18 @@ impl std::fmt::Debug for RopeEnd {
     }
 }
 
+/// How far a tension-only (slack) element may shorten, as a fraction of
+/// its length, before it pushes back with its axial stiffness
+/// ([`SubJoint::stop`](crate::cable::SubJoint::stop) = −`SLACK_STOP` · L_e;
+/// dimensionless). A slack element's shortening stands for the rope
+/// buckling inside it; its chord at half its arc is a 217° circular arc,
+/// as far as a rope element bends. At zero length (the stop before
+/// 2026-11-28) a rope striking a plate at 30 m/s with one end first
+/// telescoped elements to nothing, where their bending springs no longer
+/// move any node, and the cable stopped ("Newton did not converge")
+/// 70–110 ms after the strike.
+pub const SLACK_STOP: f64 = 0.5;
+
 /// Most elements a rope may have (a 100 000-element rope takes about
 /// 0.55 GB, measured); more is refused with a
 /// [`RopeError::InvalidParameter`] instead of exhausting memory (2³¹
@@ -637,8 +649,8 @@ impl RopeBuilder {
             let mut px = spring(JointKind::Prismatic, DVec3::X, s.ea / le, None);
             if self.tension_only {
                 px.law = SpringLaw::TensionOnly;
-                // A slack element shortens to zero length, not through it.
-                px.stop = -le;
+                // A slack element shortens to half its length, no further.
+                px.stop = -SLACK_STOP * le;
             }
             let py = spring(JointKind::Prismatic, DVec3::Y, ga / le, None);
             let pz = spring(JointKind::Prismatic, DVec3::Z, ga / le, Some(element_mass));

@@ -83,8 +83,8 @@ impl SecondOrderSystem for Chain {
             self.branch[s] = if j.taut_measure(start.0[s], start.1[s]) >= -band || j.taut_measure(predicted.0[s], predicted.1[s]) >= -band {
                 LawBranch::Taut
             } else if j.closed_measure(start.0[s], start.1[s]) < 0.0 || j.closed_measure(predicted.0[s], predicted.1[s]) < 0.0 {
-                // Shortened to zero length at the start or by the
-                // predictor: its nodes meet and it pushes back.
+                // Shortened to its stop at the start or by the
+                // predictor: it pushes back.
                 LawBranch::Closed
             } else {
                 LawBranch::Slack
@@ -97,7 +97,7 @@ impl SecondOrderSystem for Chain {
             return 0;
         }
         // A slack law that pulls moves to taut at once (and one that has
-        // shortened through zero length to closed); a taut law moves to
+        // shortened past its stop to closed); a taut law moves to
         // slack only once it pushes beyond the kink band (`KINK_BAND`), and
         // a closed one once it pulls beyond it. Within the band it is
         // accepted anyway, and moving it would send the change down a rope

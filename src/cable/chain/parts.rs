@@ -84,9 +84,10 @@ pub struct SubJoint {
     /// Extension `q − rest` (m or rad) below which a
     /// [`SpringLaw::TensionOnly`] spring pushes back with its stiffness and
     /// damping (the law's closed branch, [`LawBranch::Closed`]):
-    /// `−L_e` for a rope element's axial slide, so that a slack element
-    /// shortens freely down to zero length but cannot pass through it
-    /// (its two nodes meet). `f64::NEG_INFINITY` (the default) for none.
+    /// `−L_e/2` for a rope element's axial slide
+    /// ([`SLACK_STOP`](crate::cable::SLACK_STOP)), so that a slack element
+    /// shortens freely down to half its length but no further.
+    /// `f64::NEG_INFINITY` (the default) for none.
     /// Ignored by linear laws.
     pub stop: f64,
 }
@@ -102,7 +103,7 @@ pub enum LawBranch {
     #[default]
     Taut = 1,
     /// The linear law about the stop, `k (x − stop) + c v` (a slack
-    /// element shortened to zero length: its nodes meet and it pushes).
+    /// element shortened to its stop, half its length: it pushes).
     Closed = 2,
 }
 
