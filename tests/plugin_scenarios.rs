@@ -111,7 +111,7 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 32] = [
+const COMPARED: [&str; 33] = [
     "axial_bounce",
     "ball_hits_payload",
     "ball_on_rope",
@@ -137,6 +137,7 @@ const COMPARED: [&str; 32] = [
     "rope_on_ground",
     "rope_on_rope",
     "rope_on_slope",
+    "rope_over_box",
     "rope_over_cylinder",
     "rope_round_post",
     "spin_up",
@@ -189,6 +190,7 @@ same_rows!(
     rope_on_ground,
     rope_on_rope,
     rope_on_slope,
+    rope_over_box,
     rope_over_cylinder,
     rope_round_post,
     spin_up,

@@ -787,6 +787,33 @@ fn rope_on_ground_scenario_carries_its_weight() {
     assert!(still < 1e-9, "moved {still}");
 }
 
+/// `rope_over_box.toml` (issue 12, edges): a free 3 m steel rope (damping
+/// 0.05 s) let go over a fixed 1 m cube, 1 m over each of two top edges,
+/// 3 s at 1/60 s. At rest the cube carries the rope's weight: its
+/// `contact_force` probe (the rope's force on it) is (0, −ρ g L, 0) within
+/// 1e-4 of the weight (measured 1.7e-6); the middle rests on the top,
+/// bowed up by the legs' bending moments at the edges (between the
+/// radius and 5 cm above the top), still over the last second within
+/// 1e-6 m; the ends hang below the top.
+#[test]
+fn rope_over_box_scenario_rests_on_the_edges_with_its_weight() {
+    let (world, rows) = run("assets/scenarios/rope_over_box.toml");
+    let weight =
+        world.rope("rope").map(|r| r.length()).unwrap() * bevy_rapier_cable::cable::RopeMaterial::steel_6x36_iwrc(0.02).section().linear_density * 9.81;
+    let last = rows.last().unwrap();
+    let (force, middle, end) = ([last[1], last[2], last[3]], last[5], last[8]);
+    let second = &rows[rows.len() - 61..];
+    let still = second.iter().map(|r| (r[5] - middle).abs()).fold(0.0f64, f64::max);
+    println!(
+        "force on the cube {force:.5?} N vs weight {weight:.5} N ({:+.2e}); middle {middle:.5} m, end {end:.4} m; moved {still:.2e} m over the last second",
+        -force[1] / weight - 1.0
+    );
+    assert!((-force[1] / weight - 1.0).abs() < 1e-4 && force[0].abs() < 1e-3 * weight && force[2].abs() < 1e-3 * weight, "force {force:?} vs {weight}");
+    assert!(middle > 1.01 - 1e-4 && middle < 1.05, "middle at {middle}");
+    assert!(still < 1e-6, "moved {still}");
+    assert!(end < 1.0, "end at {end}");
+}
+
 /// `rope_over_cylinder.toml` (issue 12, frictionless capstan): 20 mm steel
 /// rope (its bending stiffness a tenth of the preset's) pinned 3 m from a
 /// fixed horizontal cylinder, over its top and a quarter turn down its side
