@@ -173,8 +173,9 @@ impl std::fmt::Debug for RopeEnd {
 /// its length, before it pushes back with its axial stiffness
 /// ([`SubJoint::stop`](crate::cable::SubJoint::stop) = −`SLACK_STOP` · L_e;
 /// dimensionless). A slack element's shortening stands for the rope
-/// buckling inside it; its chord at half its arc is a 217° circular arc,
-/// as far as a rope element bends. At zero length (the stop before
+/// buckling inside it; a chord of half the element's length stands for
+/// the rope inside it bent into a 217° circular arc, the most a rope
+/// bends within one element. At zero length (the stop before
 /// 2026-11-28) a rope striking a plate at 30 m/s with one end first
 /// telescoped elements to nothing, where their bending springs no longer
 /// move any node, and the cable stopped ("Newton did not converge")
