@@ -718,7 +718,7 @@ pub(crate) fn add_contacts(
                     // square to the element, holds the element's line on
                     // the edge wherever it slides.
                     let free = |k: usize| !((k == 0 && held_first) || (k == n && held_last));
-                    let nearer = if dist(0.0) <= dist(1.0) { (a, i, EDGE_FRACTION) } else { (b, i + 1, 1.0 - EDGE_FRACTION) };
+                    let nearer = if d0 <= d1 { (a, i, EDGE_FRACTION) } else { (b, i + 1, 1.0 - EDGE_FRACTION) };
                     let (end, k, f) = nearer;
                     if free(k) && obstacle.at_edge(end) {
                         if let Some((q, _, gap)) = obstacle.nearest_local(end) {
