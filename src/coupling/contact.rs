@@ -718,14 +718,18 @@ pub(crate) fn add_contacts(
                     // square to the element, holds the element's line on
                     // the edge wherever it slides.
                     let free = |k: usize| !((k == 0 && held_first) || (k == n && held_last));
-                    let nearer = if d0 <= d1 { (a, i, EDGE_FRACTION) } else { (b, i + 1, 1.0 - EDGE_FRACTION) };
-                    let (end, k, f) = nearer;
+                    let along = (b - a).normalize();
+                    let (end, k, f, into) = if d0 <= d1 { (a, i, EDGE_FRACTION, along) } else { (b, i + 1, 1.0 - EDGE_FRACTION, -along) };
                     if free(k) && obstacle.at_edge(end) {
                         if let Some((q, _, gap)) = obstacle.nearest_local(end) {
-                            let along = (b - a).normalize();
                             let m = end - q;
                             let normal = (m - m.dot(along) * along).normalize();
-                            if gap - radius <= reach(i) && normal.is_finite() {
+                            // Only where the edge lies beside the element,
+                            // not behind its node: there the element's
+                            // line, not the element, passes the edge (the
+                            // element beyond the node has its own check).
+                            let beside = (q - end).dot(into) > 0.0;
+                            if beside && gap - radius <= reach(i) && normal.is_finite() {
                                 let f = memory.fraction(site(2 * i + 1), f).clamp(EDGE_FRACTION, 1.0 - EDGE_FRACTION);
                                 add(memory, 2 * i + 1, (i as f64 + f) * element_length, (q, normal, m.dot(normal)), f);
                             }
