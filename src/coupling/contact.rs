@@ -550,12 +550,10 @@ impl<'a> Obstacle<'a> {
         Some((q, n, (p - q).dot(n)))
     }
 
-    /// Whether the surface point nearest to `p` (the obstacle's frame, m)
-    /// lies on an edge or a vertex of the shape (not inside a face).
-    fn at_edge(&self, p: DVec3) -> bool {
-        use rapier3d::parry::shape::FeatureId;
-        let (_, feature) = self.collider.shape().project_local_point_and_get_feature(p.as_vec3());
-        matches!(feature, FeatureId::Edge(_) | FeatureId::Vertex(_))
+    /// [`Obstacle::nearest_local`], and whether that surface point lies on
+    /// an edge or a vertex of the shape ([`nearest_and_edge`]).
+    fn nearest_local_and_edge(&self, q: DVec3) -> Option<((DVec3, DVec3, f64), bool)> {
+        nearest_and_edge(self.collider.shape(), q)
     }
 
     /// The world point `p` (m) in the obstacle's frame.
@@ -587,6 +585,13 @@ impl<'a> Obstacle<'a> {
 /// exactly); at an edge or a vertex, and on shapes without feature
 /// normals, the direction from the surface point to `p`.
 fn nearest(shape: &dyn rp::Shape, p: DVec3) -> Option<(DVec3, DVec3, f64)> {
+    nearest_and_edge(shape, p).map(|(hit, _)| hit)
+}
+
+/// [`nearest`], and whether the surface point lies on an edge or a vertex
+/// of the shape (not inside a face), from the same projection.
+fn nearest_and_edge(shape: &dyn rp::Shape, p: DVec3) -> Option<((DVec3, DVec3, f64), bool)> {
+    use rapier3d::parry::shape::FeatureId;
     let (proj, feature) = shape.project_local_point_and_get_feature(p.as_vec3());
     let q = proj.point.as_dvec3();
     let d = if proj.is_inside { q - p } else { p - q };
@@ -596,12 +601,13 @@ fn nearest(shape: &dyn rp::Shape, p: DVec3) -> Option<(DVec3, DVec3, f64)> {
     // normal to `p − q` through the nearest point supports the convex
     // shape there instead. A point on the surface itself keeps the
     // feature's.
-    let face = matches!(feature, rapier3d::parry::shape::FeatureId::Face(_));
+    let face = matches!(feature, FeatureId::Face(_));
     let normal = match shape.feature_normal_at_point(feature, proj.point) {
         Some(n) if face || d.length() < 1e-9 => n.as_dvec3().normalize(),
         _ => d.normalize(),
     };
-    normal.is_finite().then(|| (q, normal, (p - q).dot(normal)))
+    let edge = matches!(feature, FeatureId::Edge(_) | FeatureId::Vertex(_));
+    normal.is_finite().then(|| ((q, normal, (p - q).dot(normal)), edge))
 }
 
 /// Adds this step's contacts of every rope of `cable` against the
@@ -694,6 +700,7 @@ pub(crate) fn add_contacts(
             // Element interiors nearer than both their nodes.
             for i in (0..n).filter(|&i| near(i)) {
                 let (a, b) = (obstacle.local(nodes[i]), obstacle.local(nodes[i + 1]));
+                let along = (b - a).normalize();
                 let dist = |f: f64| obstacle.nearest_local(a.lerp(b, f)).map_or(f64::INFINITY, |hit| hit.2);
                 // The distance to a convex shape is convex along the
                 // element. A quarter-point below both ends starts a search
@@ -718,10 +725,9 @@ pub(crate) fn add_contacts(
                     // square to the element, holds the element's line on
                     // the edge wherever it slides.
                     let free = |k: usize| !((k == 0 && held_first) || (k == n && held_last));
-                    let along = (b - a).normalize();
                     let (end, k, f, into) = if d0 <= d1 { (a, i, EDGE_FRACTION, along) } else { (b, i + 1, 1.0 - EDGE_FRACTION, -along) };
-                    if free(k) && obstacle.at_edge(end) {
-                        if let Some((q, _, gap)) = obstacle.nearest_local(end) {
+                    if free(k) {
+                        if let Some(((q, _, gap), true)) = obstacle.nearest_local_and_edge(end) {
                             let m = end - q;
                             let normal = (m - m.dot(along) * along).normalize();
                             // Only where the edge lies beside the element,
@@ -764,16 +770,15 @@ pub(crate) fn add_contacts(
                     // drum it added contacts beside the nodes' and moved
                     // the capstan's slip ratio by 6 %).
                     let p = a.lerp(b, f);
-                    let along = (b - a).normalize();
                     let steep = |hit: &(DVec3, DVec3, f64)| hit.2 < 0.0 && hit.1.dot(along).abs() > 0.5;
-                    let here = obstacle.nearest_local(p);
+                    let here = obstacle.nearest_local_and_edge(p);
                     let anchored = memory.fraction(site(2 * i + 1), f);
                     let hit = match here {
-                        Some(hit) if steep(&hit) => Some(obstacle.segment_plane(a, b, p).unwrap_or(hit)),
-                        Some(hit) if obstacle.at_edge(p) => Some(hit),
+                        Some((hit, _)) if steep(&hit) => Some(obstacle.segment_plane(a, b, p).unwrap_or(hit)),
+                        Some((hit, true)) => Some(hit),
                         _ if whole => continue,
                         _ if anchored != f => obstacle.nearest_local(a.lerp(b, anchored)),
-                        _ => here,
+                        _ => here.map(|(hit, _)| hit),
                     };
                     let f = anchored;
                     if let Some(hit) = hit {
