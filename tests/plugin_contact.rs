@@ -733,3 +733,42 @@ fn a_box_carrying_a_rope_rides_a_platform_rising_from_the_first_frame() {
         }
     }
 }
+
+/// A free 3 m steel rope (20 mm, 30 elements of 0.1 m) laid level through
+/// a thin fixed post or plate between two of its nodes, both outside it:
+/// refused at its first step with kind `Configuration`, naming the element,
+/// the depth (the rope's radius plus the post's, or the plate's half
+/// thickness) and the point. (Before, 2026-11-28, only nodes were checked:
+/// the element was thrown out by the contact law, 2e8 N, and the cable
+/// stopped at 0.024 s with "Newton did not converge".) The same rope laid
+/// beside the post, clear of it, falls past it to the ground with no error.
+#[test]
+fn a_rope_laid_through_a_thin_post_between_its_nodes_is_refused() {
+    let run = |post: Collider, x: f32, z: f32| {
+        let mut app = plugin_app::headless_app(1.0 / 60.0);
+        let w = app.world_mut();
+        w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(20.0, 0.5, 20.0)));
+        w.spawn((RigidBody::Fixed, Transform::from_xyz(x, 0.5, z), post));
+        let rope = w.spawn(free_rope_laid_level(0.3, 1.0)).id();
+        let errors = run_frames(&mut app, 60);
+        let low = app.world().get::<CableState>(rope).map_or(f32::NAN, |s| s.nodes.iter().map(|p| p.y).fold(f32::INFINITY, f32::min));
+        (errors, low)
+    };
+    for (post, x, depth, element) in [
+        (Collider::cylinder(0.5, 0.02), 0.05, "0.0300", "element 15 (between nodes 15 and 16"),
+        (Collider::cylinder(0.5, 0.005), 0.03, "0.0150", "element 15 (between nodes 15 and 16, nearer node 15)"),
+        (Collider::cuboid(0.01, 0.5, 0.5), -0.46, "0.0200", "element 10 (between nodes 10 and 11, nearer node 10)"),
+    ] {
+        let (errors, _) = run(post, x, 1.0);
+        println!("post at x = {x} m: {:?}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>());
+        assert_eq!(errors.len(), 1, "{errors:?}");
+        let e = &errors[0];
+        assert_eq!((e.kind, e.time), (CableErrorKind::Configuration, 0.0));
+        assert!(e.message.contains(&format!("rope 0's {element}")) && e.message.contains(&format!("starts {depth} m inside a collider")), "{}", e.message);
+        assert!(e.message.contains(&format!("at ({x:.4}, 0.3000, 1.0000) m")), "{}", e.message);
+    }
+    let (errors, low) = run(Collider::cylinder(0.5, 0.02), 0.05, 1.0 + 0.02 + 0.0105);
+    println!("beside the post: errors {errors:?}, lowest node after 1 s {low} m");
+    assert!(errors.is_empty(), "{errors:?}");
+    assert!((low - 0.01).abs() < 1e-4, "the rope should have fallen to the ground: lowest node {low} m");
+}

@@ -10,6 +10,14 @@ use glam::{DMat3, DVec3};
 use std::sync::Arc;
 use thiserror::Error;
 
+/// Where [`CableError::StartsInside`] found the rope inside a collider.
+fn inside_where(node: usize, element: Option<usize>) -> String {
+    match element {
+        Some(e) => format!("element {e} (between nodes {e} and {}, nearer node {node})", e + 1),
+        None => format!("node {node}"),
+    }
+}
+
 /// Why a cable step failed.
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
@@ -48,14 +56,17 @@ pub enum CableError {
         reason: String,
     },
     /// A rope laid into a collider: at the cable's first step, a node's
-    /// surface starts deeper inside a fixed or kinematic collider than
+    /// surface, or an element's between its nodes (an element laid through
+    /// a thin post or across an edge), starts deeper inside a fixed or
+    /// kinematic collider than
     /// [`STARTS_INSIDE`](crate::coupling::STARTS_INSIDE) times the rope's
     /// radius (a rope laid with its centre on a surface is). The contact
     /// law would throw the rope out with the energy of that depth (a rope
     /// laid with one end 5 cm into a slope was thrown 2.6 km up), or fail
     /// to solve the first step, so the cable is refused instead.
     #[error(
-        "rope {rope}'s node {node} starts {depth:.4} m inside a collider, at ({:.4}, {:.4}, {:.4}) m: lay the rope with its centre at least its radius ({radius} m) from colliders' surfaces, or turn its contacts off",
+        "rope {rope}'s {} starts {depth:.4} m inside a collider, at ({:.4}, {:.4}, {:.4}) m: lay the rope with its centre at least its radius ({radius} m) from colliders' surfaces, or turn its contacts off",
+        inside_where(*node, *element),
         point.x,
         point.y,
         point.z
@@ -63,9 +74,13 @@ pub enum CableError {
     StartsInside {
         /// Rope of the chain ([`Cable::rope`]; 0 for a single rope).
         rope: usize,
-        /// Node index from that rope's start.
+        /// Node index from that rope's start (for an element's interior,
+        /// the element's nearer node).
         node: usize,
-        /// The node's position, world, m.
+        /// The element (index from the rope's start) whose interior lies
+        /// inside the collider, if the deepest point is not a node.
+        element: Option<usize>,
+        /// The node's position, or the element's deepest point, world, m.
         point: DVec3,
         /// How deep its surface lies inside the collider's, m.
         depth: f64,

@@ -691,7 +691,7 @@ pub(crate) fn add_contacts(
                 let (q, normal) = (obstacle.origin + obstacle.rotation * hit.0, obstacle.rotation * hit.1);
                 approach = approach.max(-(velocities[k] - obstacle.surface_velocity(q)).dot(normal));
                 if radius - hit.2 > deepest.map_or(0.0, |d| d.depth) {
-                    deepest = Some(Deepest { rope, node: k, point: nodes[k], depth: radius - hit.2 });
+                    deepest = Some(Deepest { rope, node: k, element: None, point: nodes[k], depth: radius - hit.2 });
                 }
                 if hit.2 - radius <= reach_k {
                     add(memory, 2 * k, k as f64 * element_length, hit, 0.0);
@@ -745,6 +745,13 @@ pub(crate) fn add_contacts(
                 };
                 let f = convex_min(dist, best - span, best + span, iterations);
                 let d = dist(f);
+                // An element laid through a thin post or across an edge
+                // overlaps the collider between its nodes, which may both
+                // lie outside it.
+                if f > 0.02 && f < 0.98 && radius - d > deepest.map_or(0.0, |d| d.depth) {
+                    let node = if f < 0.5 { i } else { i + 1 };
+                    deepest = Some(Deepest { rope, node, element: Some(i), point: nodes[i].lerp(nodes[i + 1], f), depth: radius - d });
+                }
                 if f > 0.02 && f < 0.98 && d < ends - 1e-3 * radius && d - radius <= reach(i) {
                     // At an edge (the nearest surface point on an edge or
                     // a vertex) the plane is the one at the element's
@@ -795,14 +802,18 @@ pub(crate) fn add_contacts(
     (approach, deepest)
 }
 
-/// A rope node whose surface lies inside a collider ([`add_contacts`]).
+/// A rope node, or an element's interior, whose surface lies inside a
+/// collider ([`add_contacts`]).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Deepest {
     /// Rope of the chain.
     pub rope: usize,
-    /// Node index from that rope's start.
+    /// Node index from that rope's start (the nearer node of the element,
+    /// for a point inside one).
     pub node: usize,
-    /// The node, world, m.
+    /// The element whose interior lies deepest, if it is not a node.
+    pub element: Option<usize>,
+    /// The node or the element's deepest point, world, m.
     pub point: DVec3,
     /// How deep its surface lies inside the collider's, m (its radius
     /// less its centre's distance from the collider's surface).

@@ -1290,7 +1290,11 @@ pub fn step_cables(
                     contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
                     cc.friction.discard_step();
                     cc.failed = true;
-                    failures.push((ci, start, CableError::StartsInside { rope: d.rope, node: d.node, point: d.point, depth: d.depth, radius }));
+                    failures.push((
+                        ci,
+                        start,
+                        CableError::StartsInside { rope: d.rope, node: d.node, element: d.element, point: d.point, depth: d.depth, radius },
+                    ));
                     owns.push(own);
                     passes.push(count);
                     continue;
