@@ -832,10 +832,22 @@ fn body_law(mass: f64) -> Result<ImpactLaw, ContactError> {
 /// Points of a collider shape that can touch an obstacle, in the shape's
 /// frame, each with the radius of the sphere around it (m): a ball's centre
 /// with its radius, a capsule's two segment ends with its radius, a
-/// cuboid's eight corners, a cylinder's two rims (16 points each), a
-/// convex polyhedron's vertices. Other shapes: none (they still reach the
-/// chain through rapier's impulse, one step late).
+/// cuboid's eight corners, a cylinder's two rims (16 points each), a cone's
+/// apex and base rim (16 points), a convex polyhedron's, a triangle mesh's,
+/// a segment's or a triangle's vertices, a compound's parts' points placed
+/// by their poses, and a rounded shape's inner points with its border
+/// radius added. Heightfields, polylines and voxels: none (a body carried
+/// in a chain with such a collider still reaches it through rapier's
+/// impulse, one step late).
 fn touch_points(shape: &dyn rp::Shape) -> Vec<(DVec3, f64)> {
+    let vertices = |v: &[rp::Vector]| v.iter().map(|v| (v.as_dvec3(), 0.0)).collect::<Vec<_>>();
+    let rim = |r: f64, y: f64| {
+        (0..16).map(move |k| {
+            let a = std::f64::consts::TAU * k as f64 / 16.0;
+            (DVec3::new(r * a.cos(), y, r * a.sin()), 0.0)
+        })
+    };
+    let rounded = |inner: Vec<(DVec3, f64)>, border: f32| inner.into_iter().map(|(q, r)| (q, r + border as f64)).collect::<Vec<_>>();
     if let Some(b) = shape.as_ball() {
         return vec![(DVec3::ZERO, b.radius as f64)];
     }
@@ -850,15 +862,48 @@ fn touch_points(shape: &dyn rp::Shape) -> Vec<(DVec3, f64)> {
     }
     if let Some(c) = shape.as_cylinder() {
         let (r, h) = (c.radius as f64, c.half_height as f64);
-        return (0..32)
-            .map(|k| {
-                let a = std::f64::consts::TAU * (k % 16) as f64 / 16.0;
-                (DVec3::new(r * a.cos(), if k < 16 { -h } else { h }, r * a.sin()), 0.0)
+        return rim(r, -h).chain(rim(r, h)).collect();
+    }
+    if let Some(c) = shape.as_cone() {
+        let (r, h) = (c.radius as f64, c.half_height as f64);
+        return rim(r, -h).chain(std::iter::once((DVec3::new(0.0, h, 0.0), 0.0))).collect();
+    }
+    if let Some(p) = shape.as_convex_polyhedron() {
+        return vertices(p.points());
+    }
+    if let Some(m) = shape.as_trimesh() {
+        return vertices(m.vertices());
+    }
+    if let Some(s) = shape.as_segment() {
+        return vertices(&[s.a, s.b]);
+    }
+    if let Some(t) = shape.as_triangle() {
+        return vertices(&[t.a, t.b, t.c]);
+    }
+    if let Some(c) = shape.as_compound() {
+        return c
+            .shapes()
+            .iter()
+            .flat_map(|(pose, part)| {
+                let (t, r) = (pose.translation.as_dvec3(), DMat3::from_quat(pose.rotation.as_dquat().normalize()));
+                touch_points(part.as_ref()).into_iter().map(move |(q, radius)| (t + r * q, radius))
             })
             .collect();
     }
-    if let Some(p) = shape.as_convex_polyhedron() {
-        return p.points().iter().map(|v| (v.as_dvec3(), 0.0)).collect();
+    if let Some(s) = shape.as_round_cuboid() {
+        return rounded(touch_points(&s.inner_shape), s.border_radius);
+    }
+    if let Some(s) = shape.as_round_cylinder() {
+        return rounded(touch_points(&s.inner_shape), s.border_radius);
+    }
+    if let Some(s) = shape.as_round_cone() {
+        return rounded(touch_points(&s.inner_shape), s.border_radius);
+    }
+    if let Some(s) = shape.as_round_convex_polyhedron() {
+        return rounded(touch_points(&s.inner_shape), s.border_radius);
+    }
+    if let Some(s) = shape.as_round_triangle() {
+        return rounded(touch_points(&s.inner_shape), s.border_radius);
     }
     Vec::new()
 }
