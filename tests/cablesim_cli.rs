@@ -165,3 +165,37 @@ fn view_without_the_demo_feature_exits_2_naming_it() {
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("feature `demo`") && stderr.contains("cargo run --release --features demo -- view assets/scenarios/boom_hoist.toml"), "{stderr}");
 }
+
+/// `--threads`: three independent hoist pendulums (different lengths,
+/// 40 elements each, released at 30°), and the two ropes of
+/// `rope_on_rope.toml` (one island: they touch), run on 1 and on 3 threads
+/// write the same results.csv, byte for byte.
+#[test]
+fn threads_give_the_same_results() {
+    let dir = tmp("threads");
+    let mut src = String::from("[simulation]\nduration = 2.0\ndt = 0.016666666666666666\n");
+    for (k, length) in [12.0f64, 16.0, 20.0].into_iter().enumerate() {
+        let (z, (s, c)) = (5.0 * k as f64, 30f64.to_radians().sin_cos());
+        let end = [length * s, 25.0 - length * c];
+        let ball = [end[0] + 0.3 * s, end[1] - 0.3 * c];
+        src += &format!(
+            "\n[[body]]\nname = \"p{k}\"\ntype = \"dynamic\"\nshape = \"ball\"\nradius = 0.3\nmass = 1000.0\nposition = [{}, {}, {z}]\n\n[[cable]]\nname = \"c{k}\"\nlength = {length}\nsegments = 40\ndiameter = 0.02\nmaterial = \"steel_wire_rope_6x36_iwrc\"\nstart = {{ world = [0, 25, {z}] }}\nend = {{ body = \"p{k}\", anchor = [{}, {}, 0.0] }}\npath = [[0, 25, {z}], [{}, {}, {z}]]\n\n[[probe]]\nname = \"t{k}\"\ncable = \"c{k}\"\nquantity = \"tension\"\ns = 0.0\n\n[[probe]]\nname = \"x{k}\"\nbody = \"p{k}\"\nquantity = \"position\"\n",
+            ball[0], ball[1], -0.3 * s, 0.3 * c, end[0], end[1]
+        );
+    }
+    let f = dir.join("three.toml");
+    std::fs::write(&f, src).unwrap();
+    for file in [f.as_path(), std::path::Path::new("assets/scenarios/rope_on_rope.toml")] {
+        let results: Vec<String> = ["1", "3"]
+            .iter()
+            .map(|n| {
+                let out = dir.join(format!("out{n}"));
+                let st = cablesim().arg("run").arg(file).args(["--quiet", "--threads", n, "--out"]).arg(&out).status().unwrap();
+                assert_eq!(st.code(), Some(0), "{} on {n} threads", file.display());
+                std::fs::read_to_string(out.join("results.csv")).unwrap()
+            })
+            .collect();
+        assert!(results[0].lines().count() > 100, "{}", file.display());
+        assert!(results[0] == results[1], "{}: 3 threads changed results.csv", file.display());
+    }
+}

@@ -1319,6 +1319,21 @@ struct Found {
     pair: RopePair,
 }
 
+/// The elements of `segments` (with their `boxes`, min and max corners, m)
+/// whose box overlaps the box around all the elements of another of the
+/// `cables` cables, in their order: those that may touch another cable.
+fn reaching_other_cables(segments: &[Segment], boxes: &[(DVec3, DVec3)], cables: usize) -> Vec<usize> {
+    let mut around = vec![(DVec3::INFINITY, DVec3::NEG_INFINITY); cables];
+    for (g, (lo, hi)) in segments.iter().zip(boxes) {
+        let b = &mut around[g.cable];
+        *b = (b.0.min(*lo), b.1.max(*hi));
+    }
+    let overlap = |a: &(DVec3, DVec3), b: &(DVec3, DVec3)| !(a.0.cmpgt(b.1).any() || a.1.cmplt(b.0).any());
+    // Only the cables whose boxes overlap another's are searched further.
+    let near: Vec<Vec<usize>> = (0..cables).map(|c| (0..cables).filter(|&d| d != c && overlap(&around[c], &around[d])).collect()).collect();
+    (0..segments.len()).filter(|&i| near[segments[i].cable].iter().any(|&d| overlap(&boxes[i], &around[d]))).collect()
+}
+
 /// This step's contacts between rope elements of `cables` (each with its
 /// contact settings): of one rope with itself, of two ropes of a cable's
 /// tree, and of two cables. Every two elements whose capsules (each of its
@@ -1383,7 +1398,13 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: boo
     } else {
         2
     };
-    let mut order: Vec<usize> = (0..segments.len()).collect();
+    // Between cables, only the elements whose boxes reach into another
+    // cable's box can touch it: the others are left out of the sweep. The
+    // sweep alone met every element of each of 16 ropes hanging side by
+    // side (each in its own plane across the sweep's axis) as a candidate
+    // of every other of its rope, O(n²): 29 % of the step of 16 ropes of
+    // 1 000 elements, for no pair at all.
+    let mut order: Vec<usize> = if within { (0..segments.len()).collect() } else { reaching_other_cables(&segments, &boxes, cables.len()) };
     order.sort_by(|&i, &j| boxes[i].0[axis].total_cmp(&boxes[j].0[axis]).then(i.cmp(&j)));
     let mut approach = vec![0.0f64; cables.len()];
     let mut found: Vec<Found> = Vec::new();

@@ -741,7 +741,8 @@ impl Coupling {
         out
     }
 
-    /// Phase 1 over every cable: [`step_cables`].
+    /// Phase 1 over every cable: [`step_cables`], the cables' solves run by
+    /// `each` ([`OneByOne`] or [`Threads`]).
     #[allow(clippy::too_many_arguments)]
     pub fn step(
         &mut self,
@@ -752,9 +753,10 @@ impl Coupling {
         substeps: u32,
         inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
         motions: &dyn Fn(rp::RigidBodyHandle) -> Option<BodyMotion>,
+        each: &dyn ForEachCable,
     ) -> Vec<(usize, f64, CableError)> {
         let mut all: Vec<&mut CoupledCable> = self.cables.iter_mut().collect();
-        step_cables(&mut all, bodies, Contacts { colliders, motions, jointed: &[], kinematic: &[] }, joints, h, substeps, inputs, &OneByOne)
+        step_cables(&mut all, bodies, Contacts { colliders, motions, jointed: &[], kinematic: &[] }, joints, h, substeps, inputs, each)
     }
 
     /// Phase 2 over every cable: [`after_rapier`].
@@ -1084,6 +1086,52 @@ impl ForEachCable for OneByOne {
         for cc in cables.iter_mut() {
             job(cc);
         }
+    }
+}
+
+/// [`ForEachCable`] on up to `threads` threads of the standard library
+/// (`std::thread::scope`; no pool is kept): the cables are dealt into one
+/// group per thread, the costliest first (by the number of coordinates)
+/// onto the least loaded group, and one group runs on the calling thread.
+/// `cablesim` uses it; the Bevy plugin uses Bevy's compute task pool
+/// instead. Each cable's solve is the same code on its own data, so the
+/// results are bit-identical to [`OneByOne`]'s, whatever the thread count.
+/// With fewer than two cables, or `threads` ≤ 1, it runs them one by one.
+/// Starting the threads costs some tens of µs per step: worth it for
+/// ropes of a hundred elements or more (`docs/performance.md`).
+#[derive(Debug, Clone, Copy)]
+pub struct Threads {
+    /// Most threads to use (the calling thread counts as one).
+    pub threads: usize,
+}
+
+impl ForEachCable for Threads {
+    fn for_each(&self, cables: &mut [&mut CoupledCable], job: &(dyn Fn(&mut CoupledCable) + Sync)) {
+        let groups = self.threads.min(cables.len());
+        if groups <= 1 {
+            return OneByOne.for_each(cables, job);
+        }
+        let cost = |cc: &CoupledCable| if cc.failed { 0 } else { cc.cable.state.q.len() + 1 };
+        let mut order: Vec<usize> = (0..cables.len()).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(cost(cables[i])));
+        let (mut group_of, mut load) = (vec![0; cables.len()], vec![0usize; groups]);
+        for i in order {
+            let g = (0..groups).min_by_key(|&g| load[g]).unwrap_or(0);
+            group_of[i] = g;
+            load[g] += cost(cables[i]);
+        }
+        let mut dealt: Vec<Vec<&mut CoupledCable>> = (0..groups).map(|_| Vec::new()).collect();
+        for (cc, &g) in cables.iter_mut().zip(&group_of) {
+            dealt[g].push(&mut **cc);
+        }
+        std::thread::scope(|scope| {
+            let mut rest = dealt.into_iter();
+            let here = rest.next().unwrap_or_default();
+            for group in rest {
+                scope.spawn(move || group.into_iter().for_each(job));
+            }
+            here.into_iter().for_each(job);
+        });
     }
 }
 

@@ -130,7 +130,7 @@ use super::probe::Probe;
 use super::rapier::RapierWorld;
 use super::{STATIC_MAX_ITERATIONS, STATIC_TOLERANCE};
 use crate::cable::{BaseState, BodyInChain, Cable, CableError, LumpedBody, RopeBuilder, RopeError, RopeSection, RopeView};
-use crate::coupling::{rail_motor, velocity_drive_motor, Attach, BodyInputs, BodyMotion, CableContact, CableSpec, Coupling, CouplingError, Role};
+use crate::coupling::{rail_motor, velocity_drive_motor, Attach, BodyInputs, BodyMotion, CableContact, CableSpec, Coupling, CouplingError, Role, Threads};
 use crate::crane::control::TrolleyMeasurement;
 use crate::integrate::{Scheme, SchemeParams, Substeps};
 use crate::scenario::{self, BodyKind, CableEnd, Drive, Location, ProbeTarget, Quantity, Scenario, Shape};
@@ -295,6 +295,9 @@ pub struct World {
     /// The `[[controller]]`s and, for each, the index of the cable whose
     /// trolley rail it drives.
     controllers: Vec<(ControllerRun, usize)>,
+    /// Most threads the cables' solves are spread over (1: one after the
+    /// other on the calling thread; [`World::set_threads`]).
+    threads: usize,
 }
 
 /// The closed-form motion of a fixed or kinematic scenario body (its
@@ -583,7 +586,20 @@ impl World {
             })?;
             controllers.push((run, i));
         }
-        Ok(World { scenario, core, names, rapier, motions: Motions(motions), time: 0.0, steps: 0, substeps, warnings, controllers })
+        Ok(World { scenario, core, names, rapier, motions: Motions(motions), time: 0.0, steps: 0, substeps, warnings, controllers, threads: 1 })
+    }
+
+    /// Spreads the cables' solves over at most `threads` threads
+    /// ([`crate::coupling::Threads`]; 0 counts as 1, the default: one after
+    /// the other). Independent cables then step at once; the results are
+    /// the same bits whatever the count.
+    pub fn set_threads(&mut self, threads: usize) {
+        self.threads = threads.max(1);
+    }
+
+    /// Most threads the cables' solves are spread over ([`World::set_threads`]).
+    pub fn threads(&self) -> usize {
+        self.threads
     }
 
     /// Advances the world by one frame `dt` in `substeps` sub-steps, each:
@@ -634,6 +650,7 @@ impl World {
                 1,
                 &|_| BodyInputs::default(),
                 &|b| self.motions.0.get(&b).cloned(),
+                &Threads { threads: self.threads },
             );
             if let Some((i, time, source)) = failures.into_iter().next() {
                 return Err(SimError::Diverged { cable: self.names[i].label(), time, source: Box::new(source) });
