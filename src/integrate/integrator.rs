@@ -37,8 +37,13 @@ pub enum Substeps {
 /// attempts of the Newton fallback, so they measure cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StepStats {
-    /// Newton iterations (one residual and one tangent solve each), total.
+    /// Newton iterations (one residual and one tangent solve each, or a
+    /// chord iteration's residual and re-solve), total.
     pub newton_iterations: usize,
+    /// Of those, chord iterations: a residual solved with the last
+    /// elimination ([`NewtonSettings::chord_limit`](super::NewtonSettings::chord_limit);
+    /// counted in `residual_evals`, not in `solves`).
+    pub chord_iterations: usize,
     /// Residual evaluations, total.
     pub residual_evals: usize,
     /// Tangent solves, total (including `c_v = c_q = 0` solves).
@@ -70,6 +75,7 @@ pub struct StepStats {
 impl AddAssign for StepStats {
     fn add_assign(&mut self, o: Self) {
         self.newton_iterations += o.newton_iterations;
+        self.chord_iterations += o.chord_iterations;
         self.residual_evals += o.residual_evals;
         self.solves += o.solves;
         self.substeps_used += o.substeps_used;

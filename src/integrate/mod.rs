@@ -40,7 +40,7 @@ pub use self::dense::{DenseSystem, DenseSystemError, ForceFn};
 pub use self::error::IntegrateError;
 pub use self::explicit::{substeps_needed, GROWTH, SAFETY};
 pub use self::integrator::{Integrator, StepStats, Substeps, CALM_ITERATIONS, CALM_STEPS};
-pub use self::newton::{NewtonSettings, KINK_BAND, LAST_RESORT_BRANCH_UPDATES, MAX_BRANCH_UPDATES, PATIENT_BUDGET};
+pub use self::newton::{NewtonSettings, CHORD_LIMIT, KINK_BAND, LAST_RESORT_BRANCH_UPDATES, MAX_BRANCH_UPDATES, PATIENT_BUDGET};
 pub use self::pendulum::Pendulum;
 pub use self::scheme::{stability_limit, AlphaParameters, Scheme, SchemeError, SchemeParams};
 pub use self::state::State;

@@ -115,6 +115,14 @@ pub trait SecondOrderSystem {
         false
     }
 
+    /// Whether [`resolve_last_tangent`](Self::resolve_last_tangent) solves
+    /// with the whole tangent of the last solve (not an estimate without
+    /// some of its terms), so that Newton may take a chord iteration with
+    /// it. Default: `false`.
+    fn resolves_exactly(&self) -> bool {
+        false
+    }
+
     /// Non-smooth laws (a slack rope's tension-only elements; contact
     /// next): freeze each law on a branch (taut or slack) chosen from the
     /// coordinates and velocities `(q, v)` at the start of the step,
