@@ -44,8 +44,9 @@ pub struct NewtonSettings {
     /// residual and solves it with the last elimination
     /// ([`SecondOrderSystem::resolve_last_tangent`]) instead of a fresh
     /// fused residual-and-elimination pass, in systems whose re-solve is
-    /// exact ([`SecondOrderSystem::resolves_exactly`]: a chain without pair
-    /// contacts). The tangent then lags by at most that correction, so the
+    /// exact ([`SecondOrderSystem::resolves_exactly`]: a chain without force
+    /// elements or pair contacts). The tangent then lags by at most that
+    /// correction, so the
     /// iterations converge linearly at a rate of that order, and the
     /// convergence test is unchanged.
     pub chord_limit: f64,
@@ -62,8 +63,8 @@ pub const CHORD_LIMIT: f64 = 1e-5;
 
 /// A chord iteration whose correction is larger than this fraction of the
 /// one before turns chords off for the rest of the Newton solve (the
-/// tangent changed too much since its elimination: a contact opened or
-/// closed).
+/// tangent changed too much since its elimination for the chord to
+/// converge fast).
 const CHORD_CONTRACTION: f64 = 0.1;
 
 impl Default for NewtonSettings {
