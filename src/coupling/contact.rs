@@ -1311,7 +1311,8 @@ pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, memor
 /// exceeds `2.5 r + 2 h (m + 1) J` for every `m` looked at, with `Θ`
 /// taken as the turn over `m` joints (at most `m` times the sharpest, and
 /// at most the whole rope's): checked up to the `m` where that reaches
-/// the whole rope's turn, beyond which the margin grows with `m`. Each angle between two unit directions is bounded by
+/// the whole rope's turn, beyond which the margin grows with `m`. Each
+/// angle between two unit directions is bounded by
 /// `|t₁ − t₂|/√(1 − |t₁ − t₂|²/4)` (no inverse trigonometry; within 1e-4
 /// of the angle for the 0.025 rad between elements of a 0.8π arc of 100
 /// elements).
