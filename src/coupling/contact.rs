@@ -1292,6 +1292,16 @@ pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, memor
     approach[0]
 }
 
+/// Whether two elements of one rope, `apart` elements apart along it
+/// (1: neighbours), are too near along the rope to touch each other: the
+/// rope between them is shorter than half a turn around the rope (`π r`,
+/// `radius` r and `element_length` in m). A rope cannot fold that tight,
+/// and neighbours always touch. [`rope_pairs`] leaves such pairs out, and
+/// [`cannot_touch_itself`] starts past them.
+fn too_near_along(apart: usize, element_length: f64, radius: f64) -> bool {
+    (apart.saturating_sub(1) as f64) * element_length < std::f64::consts::PI * radius
+}
+
 /// Whether `cable`, a single rope, is too little bent to touch itself in
 /// a step of `h` s: then [`rope_pairs`] would find no pair and no pair
 /// near enough to count for the step's passes, and its search is skipped
@@ -1357,7 +1367,7 @@ fn cannot_touch_itself(cable: &Cable, h: f64) -> bool {
     }
     // Elements `m` apart turn by at most `m` times the sharpest turn, and
     // by at most the total. The least `m` that `rope_pairs` looks at:
-    let first = (std::f64::consts::PI * radius / element_length).ceil().max(1.0) as usize + 1;
+    let first = (1..n).find(|&m| !too_near_along(m, element_length, radius)).unwrap_or(n);
     for m in first..n {
         let turn = (m as f64 * sharpest).min(total);
         if turn >= std::f64::consts::PI {
@@ -1505,7 +1515,7 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: boo
                 continue;
             }
             let same_rope = gi.cable == gj.cable && gi.rope == gj.rope;
-            if same_rope && (gi.element.abs_diff(gj.element).saturating_sub(1) as f64) * gi.element_length < std::f64::consts::PI * gi.radius {
+            if same_rope && too_near_along(gi.element.abs_diff(gj.element), gi.element_length, gi.radius) {
                 continue;
             }
             if boxes[j].0.cmpgt(boxes[i].1).any() || boxes[j].1.cmplt(boxes[i].0).any() {
