@@ -446,6 +446,19 @@ fn a_carried_box_on_the_ground_sticks_under_a_small_push_and_slides_under_a_larg
     assert!((a / expected - 1.0).abs() < 0.02, "slid at {a} m/s², expected {expected}");
 }
 
+/// A 2 × 0.8 × 1.2 m box of mass `m` (kg) resting on the ground (its
+/// bottom at y = 0) at `x`, friction `mu`: a car or a trailer.
+fn towed_box(x: f32, m: f32, mu: f32) -> impl Bundle {
+    (
+        RigidBody::Dynamic,
+        Collider::cuboid(1.0, 0.4, 0.6),
+        ColliderMassProperties::Mass(m),
+        Friction::coefficient(mu),
+        Velocity::zero(),
+        Transform::from_xyz(x, 0.4, 0.0),
+    )
+}
+
 /// A car towing a trailer (a newcomer's tow line): two 500 kg boxes on a
 /// fixed ground (friction 0.5), joined by 6 m of 12 mm steel rope laid
 /// taut between them (damped, τ = 0.01 s, so the pull's onset rings out);
@@ -466,16 +479,7 @@ fn a_car_towing_a_trailer_on_a_rope_pulls_it_at_the_closed_form_tension() {
     let material = RopeMaterial::steel_6x36_iwrc(0.012);
     let w = app.world_mut();
     w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(100.0, 0.5, 10.0)));
-    let body = |x: f32| {
-        (
-            RigidBody::Dynamic,
-            Collider::cuboid(1.0, 0.4, 0.6),
-            ColliderMassProperties::Mass(m),
-            Friction::coefficient(mu as f32),
-            Velocity::zero(),
-            Transform::from_xyz(x, 0.4, 0.0),
-        )
-    };
+    let body = |x: f32| towed_box(x, m, mu as f32);
     let car = w.spawn((body(0.0), ExternalForce::default())).id();
     let trailer = w.spawn(body(-(2.0 + length))).id();
     let cable = w
@@ -549,5 +553,80 @@ fn a_body_with_locked_axes_at_a_rope_start_stays_explicit() {
         let carried = sim.bodies.iter().any(|(e, b)| *e == car && matches!(b, CarriedBody::Lumped(_)));
         println!("locked axes {locked:?}: carried {carried}");
         assert_eq!(carried, expect_carried);
+    }
+}
+
+/// A train of three (a car towing two trailers, a newcomer's train): three
+/// 500 kg boxes on a fixed ground (friction 0.5) joined by two 6 m ropes of
+/// 12 mm steel laid taut (damped, τ = 0.01 s); a constant `ExternalForce`
+/// F = 12 kN pushes the car from 0.5 s. The middle box is a hub (the end
+/// of one rope, the start of the next); the car, a body on the first rope
+/// alone, is the chain's floating root, the last trailer, on the second
+/// rope alone, the end body of the rope grafted onto the hub: one chain.
+/// All slide together: `a = (F − μ M g)/M`, `M = 3m + 2ρL`, each rope's
+/// weight half on each box it joins; the second rope pulls the last
+/// trailer with `T = m a + μ (m + ρL/2) g`, and the first pulls the middle
+/// box and what it tows with `T + ρL a + m a + μ (m + ρL) g`. Before
+/// (2026-11-28), the middle box was coupled explicitly to both ropes and
+/// the car's rope stopped at 0.6 s, 0.1 s after the push ("Newton did not
+/// converge … split into 256 sub-steps").
+#[test]
+fn a_car_towing_two_trailers_pulls_them_at_the_closed_form_tensions() {
+    let mut app = app();
+    let (m, mu, force, length) = (500.0f32, 0.5f64, 12000.0f32, 6.0f32);
+    let material = RopeMaterial::steel_6x36_iwrc(0.012);
+    let w = app.world_mut();
+    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(100.0, 0.5, 10.0)));
+    let body = |x: f32| towed_box(x, m, mu as f32);
+    let car = w.spawn((body(0.0), ExternalForce::default())).id();
+    let middle = w.spawn(body(-(2.0 + length))).id();
+    let last = w.spawn(body(-2.0 * (2.0 + length))).id();
+    let rope = |from: Entity, to: Entity| {
+        CableDescriptor::new(length)
+            .material(material)
+            .damping(0.01)
+            .start(CableAnchor::body(from, Vec3::new(-1.0, -0.2, 0.0)))
+            .end(CableAnchor::body(to, Vec3::new(1.0, -0.2, 0.0)))
+    };
+    let first = w.spawn(rope(car, middle)).id();
+    let second = w.spawn(rope(middle, last)).id();
+    let (m, g) = (f64::from(m), 9.81);
+    let rho_l = material.section().linear_density * f64::from(length);
+    let total = 3.0 * m + 2.0 * rho_l;
+    let a = (f64::from(force) - mu * total * g) / total;
+    let t_last = m * a + mu * (m + 0.5 * rho_l) * g;
+    let t_middle = t_last + rho_l * a + m * a + mu * (m + rho_l) * g;
+    let mut rows = Vec::new();
+    for frame in 1..=150 {
+        if frame == 30 {
+            app.world_mut().get_mut::<ExternalForce>(car).unwrap().force = Vec3::new(force, 0.0, 0.0);
+        }
+        app.update();
+        let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+        assert!(errors.is_empty(), "{errors:?}");
+        let (Some(s1), Some(s2)) = (app.world().get::<CableState>(first), app.world().get::<CableState>(second)) else { continue };
+        let v = |e: Entity| f64::from(app.world().get::<Velocity>(e).unwrap().linear.x);
+        rows.push((s1.time, f64::from(*s1.tensions.last().unwrap()), f64::from(*s2.tensions.last().unwrap()), [v(car), v(middle), v(last)]));
+    }
+    // One chain: every box is a link of the first cable's.
+    let sim = app.world().get::<CableSim>(first).expect("the first cable carries the train");
+    for e in [car, middle, last] {
+        assert!(sim.bodies.iter().any(|(b, kind)| *b == e && matches!(kind, CarriedBody::Lumped(_))), "{e} is not carried");
+    }
+    let (t, _, _, v_end) = *rows.last().unwrap();
+    let from = rows.iter().position(|r| r.0 > t - 1.0 - 1e-9).unwrap() - 1;
+    let (t0, _, _, v0) = rows[from];
+    let late = &rows[from + 1..];
+    let (m1, m2) = (late.iter().map(|r| r.1).sum::<f64>() / late.len() as f64, late.iter().map(|r| r.2).sum::<f64>() / late.len() as f64);
+    let acc: Vec<f64> = (0..3).map(|i| (v_end[i] - v0[i]) / (t - t0)).collect();
+    println!(
+        "train: tension at the middle box {m1:.1} N (closed form {t_middle:.1}, {:+.1e}), at the last {m2:.1} N ({t_last:.1}, {:+.1e}); accelerations {acc:?} m/s² against {a:.4}",
+        m1 / t_middle - 1.0,
+        m2 / t_last - 1.0
+    );
+    assert!((m1 / t_middle - 1.0).abs() < 2e-3, "first rope {m1} N against {t_middle} N");
+    assert!((m2 / t_last - 1.0).abs() < 2e-3, "second rope {m2} N against {t_last} N");
+    for (i, ai) in acc.iter().enumerate() {
+        assert!((ai / a - 1.0).abs() < 2e-3, "box {i} accelerates at {ai} against {a}");
     }
 }

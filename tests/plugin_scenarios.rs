@@ -111,7 +111,7 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 33] = [
+const COMPARED: [&str; 34] = [
     "axial_bounce",
     "ball_hits_payload",
     "ball_on_rope",
@@ -130,6 +130,7 @@ const COMPARED: [&str; 33] = [
     "damped_drop",
     "hanging_chain",
     "hanging_payload",
+    "hook_and_payload",
     "payload_set_down",
     "pendulum_60deg",
     "perf_swing_1000",
@@ -183,6 +184,7 @@ same_rows!(
     damped_drop,
     hanging_chain,
     hanging_payload,
+    hook_and_payload,
     payload_set_down,
     pendulum_60deg,
     perf_swing_1000,

@@ -888,3 +888,63 @@ fn payload_set_down_scenario_rests_on_the_ground() {
     assert!(tension > -rope_weight, "the rope pushes on the crate with more than its weight: {tension}");
     assert!((on_crate + on_ground).length() < 1e-9 * on_crate.length(), "on the ground: {on_ground}");
 }
+
+/// A hook block and its payload (`hook_and_payload.toml`): two bodies in
+/// series on two ropes, one implicit chain (the hook a hub, the sling
+/// grafted onto it with the payload as its end body). Reference: the
+/// linearised double pendulum of point masses m₁, m₂ on straight rigid
+/// uniform rods of masses μ₁, μ₂ (the ropes), lengths l₁, l₂ (read from
+/// the static start, so stretched by the static tension), by Lagrange:
+/// `M = [[(m₁+m₂+μ₂) l₁² + μ₁l₁²/3, (m₂+μ₂/2) l₁l₂], [·, (m₂+μ₂/3) l₂²]]`,
+/// `K = diag((m₁+m₂+μ₂+μ₁/2) g l₁, (m₂+μ₂/2) g l₂)`. Started in each mode's
+/// velocity shape (the file as shipped: the slow mode at 0.02 rad; the
+/// fast one at 0.002 rad by replacing the velocities: its period grows
+/// with amplitude faster, +0.7 % at 0.02 rad by a nonlinear RK4 integration
+/// of the point-mass double pendulum), each swings at its own period with
+/// its own angle ratio θ₂/θ₁. The slow mode at the frame step, the fast
+/// one at a tenth of it (the scheme's period error), with the defaults.
+#[test]
+fn hook_and_payload_swings_in_the_double_pendulum_modes() {
+    let src = std::fs::read_to_string("assets/scenarios/hook_and_payload.toml").unwrap();
+    let s = bevy_rapier_cable::cable::preset("steel_wire_rope_6x36_iwrc", 0.012).unwrap();
+    let (g, m1, m2) = (9.81, 1000.0, 2000.0);
+    let (mu1, mu2) = (10.0 * s.linear_density, 3.0 * s.linear_density);
+    // The fast mode at a tenth of the frame step: at 1/60 s (ωh = 0.058)
+    // generalized-α ρ∞ = 0 lengthens its period by 1.5e-3 (0.46 (ωh)², as
+    // the trolley pendulum's +3.9e-4 at ωh = 0.029); measured +1.6e-3.
+    let fast = src
+        .replace("dt = 0.016666666666666666", "dt = 0.0016666666666666668")
+        .replace("linear_velocity = [0.17996, 0.0, 0.0]", "linear_velocity = [0.069286, 0.0, 0.0]")
+        .replace("linear_velocity = [0.23871, 0.0, 0.0]", "linear_velocity = [-0.026182, 0.0, 0.0]");
+    assert_ne!(fast, src);
+    for (mode, text) in [src, fast].into_iter().enumerate() {
+        let sc = scenario::parse(&text, "hook_and_payload.toml").unwrap_or_else(|e| panic!("{e}"));
+        let (world, rows) = run_scenario(sc);
+        // Columns: time, hook xyz, payload xyz, hoist_top, sling_top.
+        let (l1, l2) = (-rows[0][2], rows[0][2] - rows[0][5]);
+        let mm = [[(m1 + m2 + mu2) * l1 * l1 + mu1 * l1 * l1 / 3.0, (m2 + mu2 / 2.0) * l1 * l2], [(m2 + mu2 / 2.0) * l1 * l2, (m2 + mu2 / 3.0) * l2 * l2]];
+        let kk = [(m1 + m2 + mu2 + mu1 / 2.0) * g * l1, (m2 + mu2 / 2.0) * g * l2];
+        // det(K − ω² M) = 0: a ω⁴ + b ω² + c = 0.
+        let a = mm[0][0] * mm[1][1] - mm[0][1] * mm[1][0];
+        let b = -(kk[0] * mm[1][1] + kk[1] * mm[0][0]);
+        let c = kk[0] * kk[1];
+        let disc = (b * b - 4.0 * a * c).sqrt();
+        let omega2 = if mode == 0 { (-b - disc) / (2.0 * a) } else { (-b + disc) / (2.0 * a) };
+        let ratio = -(kk[0] - omega2 * mm[0][0]) / (-omega2 * mm[0][1]);
+        let period = 2.0 * std::f64::consts::PI / omega2.sqrt();
+        let measured = period_of(&rows, 1);
+        let (th1, th2): (Vec<f64>, Vec<f64>) = rows.iter().map(|r| (r[1] / l1, (r[4] - r[1]) / l2)).unzip();
+        let got_ratio = th1.iter().zip(&th2).map(|(a, b)| a * b).sum::<f64>() / th1.iter().map(|a| a * a).sum::<f64>();
+        let amplitude = th1.iter().fold(0.0f64, |m, t| m.max(t.abs()));
+        println!(
+            "mode {mode}: l₁ = {l1:.5} m, l₂ = {l2:.5} m; period {measured:.5} s against {period:.5} s ({:+.1e}); θ₂/θ₁ {got_ratio:.5} against {ratio:.5} ({:+.1e}); θ₁ amplitude {amplitude:.4} rad; {:.2} Newton its/step",
+            measured / period - 1.0,
+            got_ratio / ratio - 1.0,
+            world.work().0 as f64 / world.steps as f64
+        );
+        assert!((measured / period - 1.0).abs() < 5e-4, "mode {mode}: period {measured} against {period}");
+        assert!((got_ratio / ratio - 1.0).abs() < 2e-3, "mode {mode}: angle ratio {got_ratio} against {ratio}");
+        let asked = [0.02, 0.002][mode];
+        assert!((amplitude / asked - 1.0).abs() < 2e-2, "mode {mode}: amplitude {amplitude} against {asked}");
+    }
+}

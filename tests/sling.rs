@@ -155,3 +155,74 @@ fn two_leg_sling_swings_about_the_anchor_line_at_the_frame_step() {
     assert!(err.abs() < 1e-3, "sling swing period {measured} vs {period}");
     assert!(worst_t < 1e-3, "tension changed by {worst_t:e} of its static value");
 }
+
+/// Two bodies in series (a hook block and the payload on a rope below it):
+/// the lower rope is grafted onto the hook block with the payload as its
+/// end body ([`RopeModel::graft`] with [`RopeEnd::Body`]), one chain, one
+/// implicit solve. Weightless light ropes (`tension_only(false)`, 0.01 kg/m
+/// against 10 kg bodies): along the line the two bodies and two ropes are
+/// the two-mass, two-spring system `M ẍ + K x = 0`, `K = [[k₁ + k₂, −k₂],
+/// [−k₂, k₂]]`, `k = EA/L`. Started in each mode shape (every element of a
+/// rope stretched alike), each moves at its own frequency,
+/// `ω² = eig(M⁻¹K)`, and stays in its shape.
+#[test]
+fn two_bodies_in_series_oscillate_at_the_two_mass_two_spring_frequencies() {
+    let sec = RopeSection { linear_density: 0.01, ea: 1e5, ei: 1e-3, ei2: 1e-3, gj: 1e-3, min_breaking_load: 0.0 };
+    let (m1, m2, l1, l2, n) = (10.0, 20.0, 2.0, 1.0, 10);
+    let (k1, k2) = (sec.ea / l1, sec.ea / l2);
+    let hook = DVec3::new(l1, 0.0, 0.0);
+    let payload = DVec3::new(l1 + l2, 0.0, 0.0);
+    let rope = |len: f64, a: DVec3, b: DVec3| RopeBuilder::new(len, n, sec, 0.01).tension_only(false).gravity(DVec3::ZERO).path(vec![a, b]);
+    let mut model = rope(l1, DVec3::ZERO, hook)
+        .start(RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO))))
+        .end(RopeEnd::Body { body: LumpedBody::sphere(m1, 0.1, hook), anchor: DVec3::ZERO, clamp: false })
+        .build()
+        .unwrap();
+    let at = model.layout.end_body.unwrap();
+    let lower = rope(l2, hook, payload)
+        .start(RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, hook))))
+        .end(RopeEnd::Body { body: LumpedBody::sphere(m2, 0.1, payload), anchor: DVec3::ZERO, clamp: false })
+        .build()
+        .unwrap();
+    let part = model.graft(lower, &at, false).unwrap();
+    let below = model.parts[part - 1].layout.end_body.expect("the limb keeps its end body");
+    // (k₁ + k₂ − ω² m₁)(k₂ − ω² m₂) = k₂²
+    let (a, b, c) = (m1 * m2, -(m1 * k2 + m2 * (k1 + k2)), k1 * k2);
+    let disc = (b * b - 4.0 * a * c).sqrt();
+    for (mode, omega2) in [(-b - disc) / (2.0 * a), (-b + disc) / (2.0 * a)].into_iter().enumerate() {
+        // Mode shape: x₂/x₁ = k₂/(k₂ − ω² m₂).
+        let (x1, x2) = (1e-4, 1e-4 * k2 / (k2 - omega2 * m2));
+        let mut cable = Cable::new(model.clone(), Scheme::default()).unwrap();
+        let (upper, lower) = (cable.model.layout, cable.model.parts[part - 1].layout);
+        for i in 0..n {
+            cable.state.q[upper.dof(i, 3)] += x1 / n as f64;
+            cable.state.q[lower.dof(i, 3)] += (x2 - x1) / n as f64;
+        }
+        cable.state.recompute_acceleration(&mut cable.model.chain).unwrap();
+        cable.refresh();
+        let x = |c: &Cable| (c.model.body_state(&at).0.x - l1, c.model.body_state(&below).0.x - l1 - l2);
+        let start = x(&cable);
+        let period = 2.0 * std::f64::consts::PI / omega2.sqrt();
+        let h = period / 400.0;
+        let (mut last, mut crossings, mut off_shape) = (start.0, Vec::new(), 0.0f64);
+        while cable.time() < 5.2 * period {
+            cable.step(h).unwrap();
+            let (a1, a2) = x(&cable);
+            if last > 0.0 && a1 <= 0.0 {
+                crossings.push(cable.time() - h * a1 / (a1 - last));
+            }
+            last = a1;
+            // Distance from the mode shape, as a fraction of the amplitude.
+            off_shape = off_shape.max((a2 - a1 * x2 / x1).abs() / x2.abs().max(x1));
+        }
+        let measured = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
+        let err = measured / period - 1.0;
+        eprintln!(
+            "mode {mode}: start ({:.3e}, {:.3e}) m, period {measured:.6e} s against {period:.6e} s ({err:+.2e}), off its shape by {off_shape:.2e}",
+            start.0, start.1
+        );
+        assert!((start.0 - x1).abs() < 1e-6 * x1 && (start.1 - x2).abs() < 1e-6 * x1, "started at {start:?}");
+        assert!(err.abs() < 1e-3, "mode {mode}: period {measured} against {period}");
+        assert!(off_shape < 2e-2, "mode {mode} left its shape by {off_shape}");
+    }
+}

@@ -700,24 +700,38 @@ impl Cable {
         // Link velocities with all rates zero: what the base alone gives.
         ch.residual_into(t, &q, &zero, &zero, &mut r).map_err(system)?;
         let m = 6 * targets.len();
-        let split = |x: V6| [x.top.x, x.top.y, x.top.z, x.bot.x, x.bot.y, x.bot.z];
+        // Velocities and forces at each target's own point (angular, then
+        // linear): about the chain origin, a body 10 m away from it has its
+        // swing compliance (about 1e-10 m/(N s²) here) hidden under its
+        // rotation's lever arm (|p|²/I, about 4), and the pseudo-inverse
+        // below dropped it (a hook block and its payload got 4 % of the
+        // swing asked).
+        let points: Vec<DVec3> = targets.iter().map(|tg| ch.link_point(tg.link, tg.point).expect(IN_CHAIN) - ch.origin).collect();
+        let at_point = |x: V6, p: DVec3| {
+            [
+                x.top.x,
+                x.top.y,
+                x.top.z,
+                x.bot.x + x.top.y * p.z - x.top.z * p.y,
+                x.bot.y + x.top.z * p.x - x.top.x * p.z,
+                x.bot.z + x.top.x * p.y - x.top.y * p.x,
+            ]
+        };
         let mut want = Vec::with_capacity(m);
-        for tg in targets {
-            let p = ch.link_point(tg.link, tg.point).expect(IN_CHAIN) - ch.origin;
-            let target = V6::new(tg.angular, tg.linear - tg.angular.cross(p));
-            want.extend(split(target - ch.link_velocity(tg.link).expect(IN_CHAIN)));
+        for (tg, p) in targets.iter().zip(&points) {
+            let now = at_point(ch.link_velocity(tg.link).expect(IN_CHAIN), *p);
+            want.extend([tg.angular.x, tg.angular.y, tg.angular.z, tg.linear.x, tg.linear.y, tg.linear.z].iter().zip(now).map(|(t, v)| t - v));
         }
-        // Responses u = (M + c K_t)⁻¹ Jᵀ e to unit spatial forces e on each
-        // target link (generalized force S_s·e on every sub-joint inboard).
+        // Responses u = (M + c K_t)⁻¹ Jᵀ e to a unit moment or a unit force
+        // at each target's point (generalized force S_s·e, e the wrench
+        // about the origin, on every sub-joint inboard).
         let link_velocity =
             |ch: &super::chain::Chain, x: &[f64], link: usize| ch.rows[..=link].iter().zip(x).fold(V6::ZERO, |acc, (row, xs)| acc + row.s * *xs);
         let mut responses = vec![vec![0.0; n]; m];
         let mut rhs = vec![0.0; n];
-        for (i, tg) in targets.iter().enumerate() {
+        for (i, (tg, p)) in targets.iter().zip(&points).enumerate() {
             for k in 0..6 {
-                let mut e = [0.0; 6];
-                e[k] = 1.0;
-                let e = V6::new(DVec3::new(e[0], e[1], e[2]), DVec3::new(e[3], e[4], e[5]));
+                let e = if k < 3 { V6::new(DVec3::AXES[k], DVec3::ZERO) } else { V6::new(p.cross(DVec3::AXES[k - 3]), DVec3::AXES[k - 3]) };
                 for (s, b) in rhs.iter_mut().enumerate() {
                     *b = if s <= tg.link { ch.rows[s].s.dot(e) } else { 0.0 };
                 }
@@ -725,9 +739,9 @@ impl Cable {
             }
         }
         let mut a = vec![0.0; m * m];
-        for (i, tg) in targets.iter().enumerate() {
+        for (i, (tg, p)) in targets.iter().zip(&points).enumerate() {
             for (b, u) in responses.iter().enumerate() {
-                for (k, x) in split(link_velocity(ch, u, tg.link)).iter().enumerate() {
+                for (k, x) in at_point(link_velocity(ch, u, tg.link), *p).iter().enumerate() {
                     a[(6 * i + k) * m + b] = *x;
                 }
             }
@@ -739,8 +753,8 @@ impl Cable {
         }
         // Did every target get its velocity?
         let scale = want.iter().fold(0.0f64, |acc, x| acc.max(x.abs()));
-        for (i, tg) in targets.iter().enumerate() {
-            let got = split(link_velocity(ch, &v, tg.link));
+        for (i, (tg, p)) in targets.iter().zip(&points).enumerate() {
+            let got = at_point(link_velocity(ch, &v, tg.link), *p);
             let miss = got.iter().zip(&want[6 * i..6 * i + 6]).fold(0.0f64, |acc, (g, w)| acc.max((g - w).abs()));
             if miss > 1e-6 * scale + 1e-9 {
                 ch.residual_into(t, &q, &self.state.v, &self.state.a, &mut r).map_err(system)?;

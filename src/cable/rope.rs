@@ -813,9 +813,11 @@ impl RopeModel {
     /// (see [`RopeModel::parts`]). `other` must have been built with a
     /// fixed pinned or clamped start at the attachment point on the body
     /// (with the body's orientation as the base frame for a clamp); its end
-    /// may be anything but a body (pinned or clamped to the world: then the
-    /// chain closes a loop through an implicit anchor spring, as a rope
-    /// pinned at both ends does). The pin or clamp then moves with the body.
+    /// may be free, pinned or clamped to the world (then the chain closes a
+    /// loop through an implicit anchor spring, as a rope pinned at both ends
+    /// does), or a body of its own ([`RopeEnd::Body`]: a payload hung under
+    /// the hub, found in the part's layout, [`RopePart::layout`]`.end_body`).
+    /// The pin or clamp then moves with the body.
     /// Both chains must be at their initial coordinates and have the same
     /// gravity. `reversed`: the rope as its user described it runs from
     /// `other`'s end to the body.
@@ -857,9 +859,6 @@ impl RopeModel {
             BaseMotion::Fixed(b) if other.layout.start_body.is_none() && !other.layout.free_start => *b,
             _ => return Err(RopeError::InvalidPath("a grafted rope must start at a fixed pin or clamp on the body".into())),
         };
-        if other.layout.end_body.is_some() {
-            return Err(RopeError::InvalidPath("a grafted rope cannot carry a body of its own at its end".into()));
-        }
         if other.chain.gravity != self.chain.gravity {
             return Err(RopeError::InvalidPath("a grafted rope must have the chain's gravity".into()));
         }
@@ -895,7 +894,10 @@ impl RopeModel {
             _ => None,
         };
         self.q0.extend(oq0);
-        let layout = RopeLayout { first: ol.first + first, ..ol };
+        // Its end body (a payload under a hook block: two bodies in
+        // series) is a link of the limb: its place moves with the limb.
+        let end_body = ol.end_body.map(|b| BodyInChain { link: b.link + first, ..b });
+        let layout = RopeLayout { first: ol.first + first, end_body, ..ol };
         self.parts.push(RopePart { layout, section, diameter, length, reversed });
         let n = self.q0.len();
         let (zeros, mut r) = (vec![0.0; n], vec![0.0; n]);

@@ -51,8 +51,10 @@
 //!   one batch, at least one of them a cable's end, and at none of the
 //!   existing cables (a payload in a two- or four-leg sling, a beam lifted
 //!   by two cranes). The cable that ends on it and whose other end is a
-//!   dynamic body (a trolley, a jointed body), if any, else the first cable
-//!   that ends on it, carries it as above; every other cable on it is built
+//!   dynamic body the chain cannot carry (a trolley, a jointed body), if
+//!   any, else the first cable that ends on it and starts on a body on that
+//!   cable alone (a car towing), else the first cable that ends on it,
+//!   carries it as above; every other cable on it is built
 //!   from the hub outwards (reversed when the hub is at its end) and
 //!   grafted onto the body's link ([`RopeModel::graft`]): one chain, one
 //!   O(n) implicit solve. Their far ends are anchor springs to the world
@@ -63,10 +65,14 @@
 //!   ([`CouplingError::HubLoop`]): a cable from a hub to another hub (a
 //!   loop through two dynamic bodies) or to itself; if one cable of an
 //!   island cannot be built, none is ([`CouplingError::Island`]). A body
-//!   with a cable to a dynamic body that is no hub (a jointed body, a
-//!   payload hanging below it on that cable alone) is a hub only if that
-//!   cable ends on it (then that cable carries it); otherwise it stays
-//!   explicit (a grafted rope cannot carry a body at its far end yet).
+//!   with a cable to a dynamic body that is no hub and that the chain
+//!   cannot carry (a jointed body, a trolley) is a hub only if that cable
+//!   ends on it (then that cable carries it); otherwise it stays
+//!   explicit. A dynamic body on one cable alone, with no joint, at the
+//!   far end of a hub's cable is carried in the same chain: at a grafted
+//!   cable's far end as the limb's end body (a payload on a rope under a
+//!   hook block; the second trailer of a train), at the carrying cable's
+//!   start as the chain's floating root (a car towing the train).
 //! * **Base** ([`Role::Base`]): a fixed or kinematic body moves the cable
 //!   end: the start's base or the end's anchor-spring target. With a
 //!   [`BodyMotion`] given by the adapter (a scenario's prescribed motion)
@@ -481,11 +487,18 @@ type Uses = Vec<(usize, usize)>;
 
 /// The hubs of a batch: dynamic bodies with no joints at ≥ 2 cable ends of
 /// the batch (at least one of them a cable's end) and at none of the
-/// existing cables. Per hub: the carrying cable, or why there is none. A
-/// candidate with a cable to a dynamic body that is not a candidate itself
-/// (a jointed body, a payload on that cable alone) is a hub only if that
-/// cable ends on it (then it carries it); else it stays explicit, as such
-/// a limb cannot be grafted.
+/// existing cables. Per hub: the carrying cable, or why there is none.
+///
+/// A cable from a candidate to another dynamic body is a loop through two
+/// dynamic bodies unless that body can be carried in the same chain: one
+/// on that cable alone, with no joint (and, at the cable's start, no
+/// locked axes) — a payload hung below a hook block, a car towing a
+/// train. Such a cable is grafted with the body at its far end, or, when
+/// it ends on the candidate, may carry it (its far body then the chain's
+/// floating root). Of the other cables to dynamic bodies (a trolley, a
+/// jointed body): one that ends on the candidate carries it; with two, or
+/// with one that starts on it, the candidate stays explicit. A cable to
+/// another candidate, or from a candidate to itself, is refused.
 fn hubs(
     specs: &[&CableSpec],
     batch: &HashMap<rp::RigidBodyHandle, Uses>,
@@ -494,14 +507,21 @@ fn hubs(
     joints: &rp::ImpulseJointSet,
 ) -> HashMap<rp::RigidBodyHandle, Result<usize, CouplingError>> {
     let dynamic = |h: &rp::RigidBodyHandle| bodies.get(*h).is_some_and(|rb| rb.is_dynamic());
+    let used_before = |h: rp::RigidBodyHandle| existing.iter().any(|c| c.role_of(h).is_some());
+    let unjointed = |h: rp::RigidBodyHandle| joints.attached_joints(h).next().is_none();
     let uses: HashMap<rp::RigidBodyHandle, &Uses> = batch
         .iter()
-        .filter(|(hub, at)| {
-            let used_before = existing.iter().any(|c| c.role_of(**hub).is_some());
-            at.len() >= 2 && dynamic(hub) && !used_before && joints.attached_joints(**hub).next().is_none() && at.iter().any(|(_, k)| *k == 1)
-        })
+        .filter(|(hub, at)| at.len() >= 2 && dynamic(hub) && !used_before(**hub) && unjointed(**hub) && at.iter().any(|(_, k)| *k == 1))
         .map(|(h, at)| (*h, at))
         .collect();
+    // A far body the hub's chain can carry: on this cable alone, no joint,
+    // and at a cable's start no locked axes (as `classify` carries one).
+    let carriable = |body: rp::RigidBodyHandle, at_start: bool| {
+        batch.get(&body).is_some_and(|u| u.len() == 1)
+            && !used_before(body)
+            && unjointed(body)
+            && (!at_start || bodies.get(body).is_some_and(|rb| rb.locked_axes().is_empty()))
+    };
     let mut out = HashMap::new();
     for (&hub, at) in &uses {
         // The other end of each cable on the hub, when it is a dynamic body.
@@ -515,8 +535,9 @@ fn hubs(
             // through two dynamic bodies.
             Err(CouplingError::HubLoop { hub, other })
         } else {
-            match loops.as_slice() {
-                [] => Ok(at.iter().find(|(_, k)| *k == 1).expect("an end is on the hub").0),
+            let (graftable, kept): (Vec<_>, Vec<_>) = loops.iter().partition(|&&(_, k, body)| carriable(body, k == 1));
+            match kept.as_slice() {
+                [] => Ok(graftable.iter().find(|l| l.1 == 1).map(|l| l.0).unwrap_or_else(|| at.iter().find(|(_, k)| *k == 1).expect("an end is on the hub").0)),
                 // The one cable to another dynamic body (a trolley, a
                 // jointed body) carries the hub, if the hub is at its end.
                 [(i, 1, _)] => Ok(*i),
@@ -909,12 +930,12 @@ fn held_far_end(
 }
 
 /// A cable's chain before its grafts and integrator: the rope model, the
-/// bodies it carries (body, 0 start / 1 end, place; `usize::MAX` link: the
-/// end body), the followers, and the end body's initial pose (origin,
-/// orientation) in the chain.
+/// bodies it carries (body, its exact mass properties if the adapter gave
+/// them, place; `usize::MAX` link: the end body), the followers, and the
+/// end body's initial pose (origin, orientation) in the chain.
 struct Draft {
     model: RopeModel,
-    carried: Vec<(rp::RigidBodyHandle, usize, BodyInChain)>,
+    carried: Vec<(rp::RigidBodyHandle, Option<LumpedBody>, BodyInChain)>,
     followers: Vec<Follower>,
     end_pose: Option<(DVec3, DMat3)>,
 }
@@ -942,10 +963,10 @@ fn draft(spec: &CableSpec, roles: EndRoles, bodies: &rp::RigidBodySet, motions: 
             let (p, r) = pose_of(rb);
             start_point = p + r * anchor;
             if let Role::Trolley { axis, .. } = role {
-                carried.push((body, 0, BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
+                carried.push((body, spec.exact[0], BodyInChain { link: 0, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
                 rope.start(RopeStart::SlidingBody { body: spec.exact[0].unwrap_or_else(|| lumped_of(rb)), axis, anchor, clamp })
             } else if role == Role::Carried {
-                carried.push((body, 0, BodyInChain { link: FLOATING_BODY_LINK, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
+                carried.push((body, spec.exact[0], BodyInChain { link: FLOATING_BODY_LINK, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
                 rope.start(RopeStart::FloatingBody { body: spec.exact[0].unwrap_or_else(|| lumped_of(rb)), anchor, clamp })
             } else {
                 let b = base_motion(body, anchor, true, rb, motions, &mut followers);
@@ -961,7 +982,7 @@ fn draft(spec: &CableSpec, roles: EndRoles, bodies: &rp::RigidBodySet, motions: 
             let rb = &bodies[body];
             let (p, r) = pose_of(rb);
             end_point = Some(p + r * anchor);
-            carried.push((body, 1, BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
+            carried.push((body, spec.exact[1], BodyInChain { link: usize::MAX, rotation: DMat3::IDENTITY, origin: DVec3::ZERO }));
             let lumped = spec.exact[1].unwrap_or_else(|| lumped_of(rb));
             end_body = Some((lumped.rotation, anchor));
             rope.end(RopeEnd::Body { body: lumped, anchor, clamp })
@@ -987,21 +1008,35 @@ fn draft(spec: &CableSpec, roles: EndRoles, bodies: &rp::RigidBodySet, motions: 
 /// Grafts a cable's rope onto the chain of `draft`, whose end body is the
 /// hub the cable is attached to (at its end when `reversed`, else at its
 /// start). The limb starts at the hub and ends at the cable's other
-/// attachment (an anchor spring, or free).
+/// attachment: an anchor spring, free, or a body the chain carries (`role`
+/// [`Role::Carried`]: a payload below the hub; it becomes the limb's end
+/// body and one of the draft's carried bodies).
 fn graft(
     draft: &mut Draft,
     spec: &CableSpec,
     reversed: bool,
+    roles: EndRoles,
     bodies: &rp::RigidBodySet,
     motions: &HashMap<rp::RigidBodyHandle, BodyMotion>,
 ) -> Result<(), CouplingError> {
     let (near, far) = if reversed { (spec.end, spec.start) } else { (spec.start, spec.end) };
+    let far_k = usize::from(!reversed);
     let Attach::Body { anchor, clamp, .. } = near else {
         unreachable!("a grafted cable is attached to its hub");
     };
     let (origin, r) = draft.end_pose.expect("the carrying cable ends on the hub");
     let at = origin + r * anchor;
-    let (end, far_point) = held_far_end(far, bodies, motions, &mut draft.followers)?;
+    let mut far_body = None;
+    let (end, far_point) = match (far, roles[far_k]) {
+        (Attach::Body { body, anchor, clamp }, Some((_, Role::Carried))) => {
+            let rb = &bodies[body];
+            let (p, r) = pose_of(rb);
+            let exact = spec.exact[far_k];
+            far_body = Some((body, exact));
+            (RopeEnd::Body { body: exact.unwrap_or_else(|| lumped_of(rb)), anchor, clamp }, Some(p + r * anchor))
+        }
+        _ => held_far_end(far, bodies, motions, &mut draft.followers)?,
+    };
     let path = match &spec.path {
         Some(p) if reversed => p.iter().rev().copied().collect(),
         Some(p) => p.clone(),
@@ -1013,7 +1048,11 @@ fn graft(
     };
     let limb = spec.rope.clone().start(held_start(BaseMotion::Fixed(BaseState::fixed(r, at)), clamp)).end(end).path(path).build()?;
     let place = draft.model.layout.end_body.expect("the carrying cable ends on the hub");
-    draft.model.graft(limb, &place, reversed)?;
+    let part = draft.model.graft(limb, &place, reversed)?;
+    if let Some((body, exact)) = far_body {
+        let limb_end = draft.model.parts[part - 1].layout.end_body.expect("a limb built with an end body has one");
+        draft.carried.push((body, exact, limb_end));
+    }
     Ok(())
 }
 
@@ -1023,11 +1062,11 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
     let Draft { model, carried, followers, .. } = draft;
     let carried = carried
         .into_iter()
-        .map(|(body, k, mut place)| {
+        .map(|(body, exact, mut place)| {
             if place.link == usize::MAX {
                 place = model.layout.end_body.expect("end body built");
             }
-            let lb = spec.exact[k].unwrap_or_else(|| lumped_of(&bodies[body]));
+            let lb = exact.unwrap_or_else(|| lumped_of(&bodies[body]));
             let link_damping = model.chain.joints()[place.link].link.map_or((0.0, 0.0), |l| (l.linear_damping, l.angular_damping));
             let rb = &bodies[body];
             CarriedLink {
@@ -2159,7 +2198,7 @@ pub fn build_cables(
             Ok(Classified { roles, placement: Placement::Grafted { onto, reversed, .. } }) => {
                 let onto = *onto;
                 let r = match &mut drafts[onto] {
-                    Some(Ok(d)) => graft(d, &specs[i], *reversed, bodies, motions),
+                    Some(Ok(d)) => graft(d, &specs[i], *reversed, *roles, bodies, motions),
                     _ => Err(CouplingError::Island { cable: onto }),
                 };
                 out[i] = Some(match r {

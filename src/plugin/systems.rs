@@ -258,7 +258,17 @@ pub(crate) fn init_cables(
         }
         let mut carried = Vec::new();
         let mut rail = None;
-        for (i, (be, h)) in ends.iter().enumerate().filter_map(|(i, e)| e.map(|e| (i, e))) {
+        // Its own ends, then the far bodies its grafted ropes carry (a
+        // payload below the hub).
+        let limb_ends = owners
+            .iter()
+            .zip(&parts)
+            .filter(|(_, p)| p.is_some_and(|(onto, _)| onto == k))
+            .flat_map(|((_, e, _, _), _)| e.iter().flatten().copied())
+            .filter(|(be, h)| ends.iter().flatten().all(|(own, _)| own != be) && cc.carried.iter().any(|c| c.body == *h))
+            .map(|e| (1, e));
+        let own_ends = ends.iter().enumerate().filter_map(|(i, e)| e.map(|e| (i, e)));
+        for (i, (be, h)) in own_ends.chain(limb_ends) {
             let role = cc.role_of(h).expect("every body end has a role");
             carried.push((
                 be,
