@@ -324,7 +324,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
             rotation: b.rotation_at(0.0),
             linear_velocity: b.linear_velocity,
             angular_velocity: b.angular_velocity,
-            motion: (b.kind != BodyKind::Dynamic).then(|| body_motion(b)),
+            motion: (b.kind != BodyKind::Dynamic).then(|| body_motion(b, h)),
         };
         let mut e = world.spawn((
             Name::new(b.name.clone()),

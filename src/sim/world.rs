@@ -302,9 +302,24 @@ pub struct World {
 
 /// The closed-form motion of a fixed or kinematic scenario body (its
 /// frame; for a `spin`, the angular velocity and acceleration too; the
-/// origin's acceleration by a central difference of the velocity, zero for
-/// a piecewise-linear `table`).
-pub(crate) fn body_motion(b: &scenario::Body) -> BodyMotion {
+/// origin's acceleration by a central difference of the velocity), for
+/// cable steps of `h` (s).
+///
+/// A `table` is piecewise linear: its velocity jumps at a point, and its
+/// acceleration there is an impulse. Given as such (zero acceleration and
+/// the jump in the velocity), the cable's relative coordinates never saw
+/// it: a payload hung from a table-driven trolley set off with the
+/// trolley, rigidly, instead of swinging back (and the central difference
+/// of the velocity at the jump gave a hook starting at 0.1 m/s a
+/// 5 000 m/s² base acceleration, and the rope's first element turned
+/// inside out). So a table's velocity is its mean over the last step,
+/// `(x(t) − x(t − h))/h`, and its acceleration the change of that mean
+/// over a step, `(v(t) − v(t − h))/h`: the slope between points and zero
+/// acceleration there, and at a point the velocity change spread over two
+/// steps as a finite acceleration of the same impulse. Before its first
+/// point the table goes on with its first segment's slope (a rope starts
+/// moving with its base, as the state at t = 0 has it).
+pub(crate) fn body_motion(b: &scenario::Body, h: f64) -> BodyMotion {
     let rot = DMat3::from_quat(b.rotation);
     match &b.motion {
         None => {
@@ -313,25 +328,27 @@ pub(crate) fn body_motion(b: &scenario::Body) -> BodyMotion {
         }
         Some(m) => {
             let (m, base, r0) = (m.clone(), b.position, b.rotation);
+            let first = match &m {
+                scenario::Motion::Table { points } => points.first().map(|p| p.0),
+                _ => None,
+            };
             Arc::new(move |t| {
                 let eps = 1e-5;
+                let (velocity, acceleration) = match first {
+                    Some(t0) => {
+                        let x = |s: f64| if s < t0 { m.position_at(t0, base) + m.velocity_at(t0) * (s - t0) } else { m.position_at(s, base) };
+                        let mean = |s: f64| (x(s) - x(s - h)) / h;
+                        (mean(t), (mean(t) - mean(t - h)) / h)
+                    }
+                    None => (m.velocity_at(t), (m.velocity_at(t + eps) - m.velocity_at(t - eps)) / (2.0 * eps)),
+                };
                 BaseState {
                     rotation: DMat3::from_quat(m.rotation_at(t) * r0),
                     position: m.position_at(t, base),
                     angular_velocity: m.angular_velocity_at(t),
-                    velocity: m.velocity_at(t),
+                    velocity,
                     angular_acceleration: m.angular_acceleration_at(t),
-                    // A table is piecewise linear: no acceleration between
-                    // its points, and a velocity jump at one that no step
-                    // resolves (measured: the central difference there gave
-                    // a hook starting at 0.1 m/s a 5 000 m/s² base
-                    // acceleration, and the rope's first element turned
-                    // inside out).
-                    acceleration: if matches!(m, scenario::Motion::Table { .. }) {
-                        DVec3::ZERO
-                    } else {
-                        (m.velocity_at(t + eps) - m.velocity_at(t - eps)) / (2.0 * eps)
-                    },
+                    acceleration,
                 }
             })
         }
@@ -413,7 +430,9 @@ impl World {
         let scheme = Scheme::from_name(&ic.name, &params).map_err(|e| SimError::Integrator(e.to_string(), file.clone()))?;
         // Every body and joint is in rapier; the core decides which bodies
         // become links of a cable's chain.
-        let mut rapier = RapierWorld::new(sim.gravity, sim.dt / sim.substeps.unwrap_or(1).max(1) as f64);
+        // The cable step: the step of the prescribed motions' table velocities.
+        let h_motion = sim.dt / sim.substeps.unwrap_or(1).max(1) as f64;
+        let mut rapier = RapierWorld::new(sim.gravity, h_motion);
         for b in &scenario.bodies {
             rapier.add_body(b);
         }
@@ -436,8 +455,12 @@ impl World {
             let (h1, h2) = (handle(&j.body1), handle(&j.body2));
             rapier.add_joint(j, h1, h2, sim.dt);
         }
-        let motions: HashMap<_, BodyMotion> =
-            scenario.bodies.iter().filter(|b| b.kind != BodyKind::Dynamic).map(|b| (rapier.body(&b.name).expect("added").handle, body_motion(b))).collect();
+        let motions: HashMap<_, BodyMotion> = scenario
+            .bodies
+            .iter()
+            .filter(|b| b.kind != BodyKind::Dynamic)
+            .map(|b| (rapier.body(&b.name).expect("added").handle, body_motion(b, h_motion)))
+            .collect();
         let specs: Vec<CableSpec> = scenario.cables.iter().map(|c| cable_spec(&scenario, c, &scheme, &rapier)).collect();
         let mut core = Coupling::new();
         let built = core.add(&specs, &mut rapier.pw.bodies, &mut rapier.pw.impulse_joints, &motions);
