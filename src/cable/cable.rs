@@ -35,6 +35,20 @@ pub enum CableError {
         /// What the static solver reported.
         source: StaticError,
     },
+    /// The integrator did not converge on a rope without damping some of
+    /// whose tension-only elements were slack at the failing step's start:
+    /// the error, with the advice that usually lets such a run go on (an
+    /// undamped rope that snaps taut rings at its element scale, and once
+    /// it goes slack again that energy whips it; see `docs/architecture.md`,
+    /// "Slack … Known failures").
+    #[error(
+        "{source}; the rope has no damping and was slack here: undamped, every snap taut rings on at the element scale and whips the slack rope. \
+         A damping time τ of about 0.01 s (`RopeBuilder::damping`, `CableDescriptor::damping`, scenario `damping`) usually lets such a run go on"
+    )]
+    UndampedSlack {
+        /// What the integrator reported.
+        source: IntegrateError,
+    },
     /// [`Cable::solve_static`] on a tension-only rope: the equilibrium on
     /// the taut branch needs an element to push, which a rope cannot.
     #[error("static equilibrium needs element {element} of rope {rope} to push with {compression:.4e} N: a rope cannot (use `tension_only(false)` for a rod or beam)")]
@@ -162,9 +176,20 @@ impl Cable {
         Ok(c)
     }
 
+    /// Whether the chain has tension-only elements without damping, and
+    /// one of them is slack in the current state.
+    fn undamped_and_slack(&self) -> bool {
+        let (q, v) = (&self.state.q, &self.state.v);
+        self.model.chain.joints().iter().enumerate().any(|(s, j)| {
+            j.law == super::chain::SpringLaw::TensionOnly && j.damping == 0.0 && q.get(s).zip(v.get(s)).is_some_and(|(q, v)| j.taut_measure(*q, *v) < 0.0)
+        })
+    }
+
     /// Advances the cable by `h` seconds. On error (Newton failure, a solve
     /// failure, or a state that left physical sense) the state and the time
     /// are left at the start of the step, so the results so far stay valid.
+    /// A Newton failure on an undamped rope that was slack is
+    /// [`CableError::UndampedSlack`], with the advice.
     pub fn step(&mut self, h: f64) -> Result<StepStats, CableError> {
         // The integrator restores the state itself when it fails; the sanity
         // check's rejection undoes the step through it as well.
@@ -172,6 +197,9 @@ impl Cable {
             Ok(stats) => stats,
             Err(e) => {
                 self.refresh();
+                if matches!(e, IntegrateError::NotConverged { .. }) && self.undamped_and_slack() {
+                    return Err(CableError::UndampedSlack { source: e });
+                }
                 return Err(e.into());
             }
         };
