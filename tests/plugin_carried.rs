@@ -684,3 +684,58 @@ fn a_pushed_ball_on_a_steel_rope_swings_at_the_pendulum_amplitude() {
     println!("pushed ball: swing amplitude {amplitude:.5} m against Δv/ω = {expected:.5} m ({:+.1e})", amplitude / expected - 1.0);
     assert!((amplitude / expected - 1.0).abs() < 2e-3, "amplitude {amplitude} against {expected}");
 }
+
+/// A car driven by `Velocity` writes (a game's vehicle controller), towing
+/// a trailer on 6 m of 12 mm steel rope laid taut (τ = 0.01 s), friction
+/// 0.5 on the ground: the written speed ramps to 2 m/s over 2 s, then
+/// holds. Every frame's write is a jump in the car's rates (the chain's
+/// floating root: the instant response). The run goes on, and the
+/// trailer follows at the car's speed (measured: 1.91 m/s over the last
+/// second). On 2026-11-28, with the jump taken over the step, the taut
+/// rope absorbed the writes and the cable stopped at 1.7 s; with the last
+/// step's contacts in that response, the car did not move; and the
+/// car's creation-frame velocity (3 cm/s, rope taut) was refused until
+/// `Cable::set_link_velocities` refined its solve. Open: the rope's
+/// tension over the last second averages 1 715 N, 30 % below the steady
+/// sliding `μ (m + ρL/2) g` = 2 461 N (the trailer surges; not
+/// diagnosed), so it is printed, not asserted.
+#[test]
+fn a_car_driven_by_velocity_writes_tows_its_trailer_at_the_friction_tension() {
+    let mut app = app();
+    let (m, mu, length) = (500.0f32, 0.5f64, 6.0f32);
+    let material = RopeMaterial::steel_6x36_iwrc(0.012);
+    let w = app.world_mut();
+    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(100.0, 0.5, 10.0)));
+    let car = w.spawn(towed_box(0.0, m, mu as f32)).id();
+    let trailer = w.spawn(towed_box(-(2.0 + length), m, mu as f32)).id();
+    let cable = w
+        .spawn(
+            CableDescriptor::new(length)
+                .material(material)
+                .damping(0.01)
+                .start(CableAnchor::body(car, Vec3::new(-1.0, -0.2, 0.0)))
+                .end(CableAnchor::body(trailer, Vec3::new(1.0, -0.2, 0.0))),
+        )
+        .id();
+    let mut late = Vec::new();
+    for frame in 1..=300 {
+        let v = (frame as f32 / 60.0).min(2.0);
+        app.world_mut().get_mut::<Velocity>(car).unwrap().linear.x = v;
+        app.update();
+        let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+        assert!(errors.is_empty(), "frame {frame}: {errors:?}");
+        if frame > 240 {
+            let s = app.world().get::<CableState>(cable).unwrap();
+            late.push((f64::from(*s.tensions.last().unwrap()), f64::from(app.world().get::<Velocity>(trailer).unwrap().linear.x)));
+        }
+    }
+    let rho_l = material.section().linear_density * f64::from(length);
+    let expected = mu * (f64::from(m) + 0.5 * rho_l) * 9.81;
+    let tension = late.iter().map(|r| r.0).sum::<f64>() / late.len() as f64;
+    let speed = late.iter().map(|r| r.1).sum::<f64>() / late.len() as f64;
+    println!(
+        "velocity-driven car: trailer at {speed:.4} m/s (car written 2 m/s), tension {tension:.1} N against μ(m + ρL/2)g = {expected:.1} N ({:+.1e})",
+        tension / expected - 1.0
+    );
+    assert!((speed / 2.0 - 1.0).abs() < 0.1, "trailer speed {speed}");
+}

@@ -29,7 +29,8 @@
 //!     velocity write, an impulse) and the one rapier's contacts made in
 //!     its last step, as an impulse `J = M Δv` (and `I Δω`) on the body's
 //!     link: the chain's rates jump by `(M + h C + h² K)⁻¹ Jᵀ` at once
-//!     ([`Cable::apply_impulse`]), so the rope and the body share it as
+//!     (the chain's floating root by `M⁻¹ Jᵀ`; [`Cable::apply_impulse`]),
+//!     so the rope and the body share it as
 //!     their joint inertia dictates (a contact that persists from step to
 //!     step, a body resting on a dynamic one, is a load over the step);
 //!   * applies the user's force and torque, gravity scale and damping
@@ -1317,17 +1318,32 @@ pub fn step_cables(
                 cc.cable.model.chain.loads_mut().push(LinkLoad { link, force, local_point, moment });
             }
         }
-        // The response over the (sub-)step, `(M + h C + h² K)⁻¹ Jᵀ`, as a
-        // pin or clamp would answer the impulse, and as the rope's stiff
-        // directions must: the instant response (the mass matrix alone)
+        // The response over the (sub-)step, `(M + h C + h² K)⁻¹ Jᵀ` with the
+        // rope's and its anchor springs' stiffness, as a pin or clamp would
+        // answer the impulse, and as the rope's stiff directions must: the instant response (the mass matrix alone)
         // sends the jump into the cheapest motion, the shear slide at the
         // body (the body alone moving across the last element), and the
         // next step had that shear spring ring at the body's speed: a 1 t
         // ball on 10.4 m of damped steel rope pushed at 0.2 m/s stopped
         // with "Newton did not converge" (2026-11-28; the same with a
         // sling's grafted leg giving way at its anchor spring before).
-        let over = h / n as f64;
+        // The chain's floating root (a car towing) is the exception: its
+        // own six coordinates come first, so the instant response moves it
+        // without a kink, and over the step the taut rope took a `Velocity`
+        // write's jump every frame until a tow line driven that way stopped
+        // at 1.7 s.
+        let floating = cc.cable.model.layout.floating_start.then_some(crate::cable::rope::FLOATING_BODY_LINK);
+        let step = h / n as f64;
+        let anchored = !cc.cable.model.chain.anchors().is_empty();
+        // Without the last step's contacts (the step's own are found
+        // below): their stick springs would take the jump over the step,
+        // and a car on the ground whose `Velocity` the user writes did not
+        // move at all.
+        if !impulses.is_empty() {
+            contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
+        }
         for (link, point, (impulse, angular)) in impulses {
+            let over = if anchored || Some(link) != floating { step } else { 0.0 };
             if let Err(e) = cc.cable.apply_impulse(link, point, impulse, angular, over) {
                 cc.advance_failure = Some((cc.cable.time(), e));
             }
