@@ -459,6 +459,27 @@ fn towed_box(x: f32, m: f32, mu: f32) -> impl Bundle {
     )
 }
 
+/// The tow line of the towing tests: a fixed ground, a car at x = 0 and a
+/// trailer 2 m + `length` behind it (each [`towed_box`]), joined by a rope
+/// of `material` (τ = 0.01 s) from the car's rear to the trailer's front;
+/// returns (car, trailer, cable).
+fn tow_line(app: &mut App, m: f32, mu: f32, length: f32, material: RopeMaterial) -> (Entity, Entity, Entity) {
+    let w = app.world_mut();
+    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(100.0, 0.5, 10.0)));
+    let car = w.spawn(towed_box(0.0, m, mu)).id();
+    let trailer = w.spawn(towed_box(-(2.0 + length), m, mu)).id();
+    let cable = w
+        .spawn(
+            CableDescriptor::new(length)
+                .material(material)
+                .damping(0.01)
+                .start(CableAnchor::body(car, Vec3::new(-1.0, -0.2, 0.0)))
+                .end(CableAnchor::body(trailer, Vec3::new(1.0, -0.2, 0.0))),
+        )
+        .id();
+    (car, trailer, cable)
+}
+
 /// A car towing a trailer (a newcomer's tow line): two 500 kg boxes on a
 /// fixed ground (friction 0.5), joined by 6 m of 12 mm steel rope laid
 /// taut between them (damped, τ = 0.01 s, so the pull's onset rings out);
@@ -477,20 +498,8 @@ fn a_car_towing_a_trailer_on_a_rope_pulls_it_at_the_closed_form_tension() {
     let mut app = app();
     let (m, mu, force, length) = (500.0f32, 0.5f64, 8000.0f32, 6.0f32);
     let material = RopeMaterial::steel_6x36_iwrc(0.012);
-    let w = app.world_mut();
-    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(100.0, 0.5, 10.0)));
-    let body = |x: f32| towed_box(x, m, mu as f32);
-    let car = w.spawn((body(0.0), ExternalForce::default())).id();
-    let trailer = w.spawn(body(-(2.0 + length))).id();
-    let cable = w
-        .spawn(
-            CableDescriptor::new(length)
-                .material(material)
-                .damping(0.01)
-                .start(CableAnchor::body(car, Vec3::new(-1.0, -0.2, 0.0)))
-                .end(CableAnchor::body(trailer, Vec3::new(1.0, -0.2, 0.0))),
-        )
-        .id();
+    let (car, trailer, cable) = tow_line(&mut app, m, mu as f32, length, material);
+    app.world_mut().entity_mut(car).insert(ExternalForce::default());
     let (m, g) = (f64::from(m), 9.81);
     let rope = material.section().linear_density * f64::from(length);
     let a = (f64::from(force) - mu * (2.0 * m + rope) * g) / (2.0 * m + rope);
@@ -704,19 +713,7 @@ fn a_car_driven_by_velocity_writes_tows_its_trailer_at_the_friction_tension() {
     let mut app = app();
     let (m, mu, length) = (500.0f32, 0.5f64, 6.0f32);
     let material = RopeMaterial::steel_6x36_iwrc(0.012);
-    let w = app.world_mut();
-    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(100.0, 0.5, 10.0)));
-    let car = w.spawn(towed_box(0.0, m, mu as f32)).id();
-    let trailer = w.spawn(towed_box(-(2.0 + length), m, mu as f32)).id();
-    let cable = w
-        .spawn(
-            CableDescriptor::new(length)
-                .material(material)
-                .damping(0.01)
-                .start(CableAnchor::body(car, Vec3::new(-1.0, -0.2, 0.0)))
-                .end(CableAnchor::body(trailer, Vec3::new(1.0, -0.2, 0.0))),
-        )
-        .id();
+    let (car, trailer, cable) = tow_line(&mut app, m, mu as f32, length, material);
     let mut late = Vec::new();
     for frame in 1..=300 {
         let v = (frame as f32 / 60.0).min(2.0);
