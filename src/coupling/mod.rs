@@ -515,13 +515,13 @@ fn hubs(
         .filter(|(hub, at)| at.len() >= 2 && dynamic(hub) && !used_before(**hub) && unjointed(**hub) && at.iter().any(|(_, k)| *k == 1))
         .map(|(h, at)| (*h, at))
         .collect();
-    // A far body the hub's chain can carry: on this cable alone, no joint,
-    // and at a cable's start no locked axes (as `classify` carries one).
+    // A far body the hub's chain can carry: on this cable alone, with no
+    // joint, and one `classify` carries ([`carried_alone`]).
     let carriable = |body: rp::RigidBodyHandle, at_start: bool| {
         batch.get(&body).is_some_and(|u| u.len() == 1)
             && !used_before(body)
             && unjointed(body)
-            && (!at_start || bodies.get(body).is_some_and(|rb| rb.locked_axes().is_empty()))
+            && bodies.get(body).is_some_and(|rb| carried_alone(rb, at_start))
     };
     let mut out = HashMap::new();
     for (&hub, at) in &uses {
@@ -548,6 +548,15 @@ fn hubs(
         out.insert(hub, carrier);
     }
     out
+}
+
+/// Whether a dynamic body with no joint, at one cable end alone, is
+/// carried in that cable's chain: at the cable's end always (a payload),
+/// at its start (the chain's floating root, a car towing) unless its axes
+/// are locked (kept explicit: a carried body's locked axes are refused, and
+/// a game's vehicle often has them).
+fn carried_alone(rb: &rp::RigidBody, at_start: bool) -> bool {
+    !at_start || rb.locked_axes().is_empty()
 }
 
 /// Roles of the bodies at the ends of `specs`, cable by cable, and where
@@ -602,12 +611,8 @@ pub fn classify(
                     let attached: Vec<_> = joints.attached_joints(*body).collect();
                     match (k, attached.as_slice()) {
                         // A payload at its end; a car towing on its start
-                        // (the chain's floating root) unless its axes are
-                        // locked (kept explicit, as before: a carried body's
-                        // locked axes are refused, and a game's vehicle
-                        // often has them).
-                        (1, []) => Role::Carried,
-                        (0, []) if rb.locked_axes().is_empty() => Role::Carried,
+                        // (the chain's floating root), see `carried_alone`.
+                        (k, []) if carried_alone(rb, k == 0) => Role::Carried,
                         (0, [(b1, b2, jh, j)]) => {
                             let other = if *b1 == *body { *b2 } else { *b1 };
                             let prismatic = j.data.locked_axes == rp::JointAxesMask::LOCKED_PRISMATIC_AXES;
@@ -1320,8 +1325,9 @@ pub fn step_cables(
         }
         // The response over the (sub-)step, `(M + h C + h² K)⁻¹ Jᵀ` with the
         // rope's and its anchor springs' stiffness, as a pin or clamp would
-        // answer the impulse, and as the rope's stiff directions must: the instant response (the mass matrix alone)
-        // sends the jump into the cheapest motion, the shear slide at the
+        // answer the impulse, and as the rope's stiff directions must: the
+        // instant response (the mass matrix alone) sends the jump into the
+        // cheapest motion, the shear slide at the
         // body (the body alone moving across the last element), and the
         // next step had that shear spring ring at the body's speed: a 1 t
         // ball on 10.4 m of damped steel rope pushed at 0.2 m/s stopped
@@ -1336,12 +1342,10 @@ pub fn step_cables(
         let step = h / n as f64;
         let anchored = !cc.cable.model.chain.anchors().is_empty();
         // Without the last step's contacts (the step's own are found
-        // below): their stick springs would take the jump over the step,
-        // and a car on the ground whose `Velocity` the user writes did not
-        // move at all.
-        if !impulses.is_empty() {
-            contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
-        }
+        // below, on the cleared chain): their stick springs would take the
+        // jump over the step, and a car on the ground whose `Velocity` the
+        // user writes did not move at all.
+        contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
         for (link, point, (impulse, angular)) in impulses {
             let over = if anchored || Some(link) != floating { step } else { 0.0 };
             if let Err(e) = cc.cable.apply_impulse(link, point, impulse, angular, over) {
@@ -1358,7 +1362,7 @@ pub fn step_cables(
         let mut own = Vec::new();
         let mut count = 1;
         if !cc.failed {
-            contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
+            // (The last step's contacts were cleared above.)
             cc.friction.discard_step();
             cc.body_contacts = false;
             // The acceleration a cable starts from, before its first step,
