@@ -161,13 +161,17 @@ fn rope_bridge(every: f32) -> (Vec<Vec<(Vec3, Vec3)>>, Vec<String>) {
 /// `CableError` (before the free bodies' pose and velocity handoff kept
 /// rapier's pose of a spinning or stacked crate, the cable stopped with
 /// "Newton did not converge" 0.1–4 s after some landings): the five left
-/// all lie on the ropes (their centres between 1.6 and 2.3 m: none fell
-/// through, none was thrown off), and over the last second none moves
-/// faster than 0.3 m/s. (They are not at rest: taking a crate away sets
-/// the bridge swinging in its slow antisymmetric mode, which stretches
-/// the ropes little and so is barely damped by their stiffness-
-/// proportional damping; a crate sliding off or thrown would move at
-/// metres per second.)
+/// all lie on the ropes (their centres between 1.6 and 2.3 m and over the
+/// deck, |x| < 3 m and |z| < 0.6 m: none fell through, none was thrown
+/// off), and over the last second none moves faster than 0.5 m/s. (They
+/// are not at rest: taking a crate away sets the bridge swinging in its
+/// slow antisymmetric mode, which stretches the ropes little and so is
+/// barely damped by their stiffness-proportional damping. Which crate
+/// ends where is chaotic, and so is that swing: over drops 0.4, 0.5, 0.6,
+/// 0.7, 0.8, 1.0, 1.2 and 1.5 s apart the fastest crate of the last
+/// second moved at 0.11–0.38 m/s, and after a change of Newton's
+/// iterates within its tolerance (2026-11-28) at 0.05–0.33 m/s. A crate
+/// sliding off or thrown moves at metres per second.)
 #[test]
 fn crates_dropped_on_a_rope_bridge_stack_and_come_to_rest_on_it() {
     for every in [0.4, 0.7, 1.5] {
@@ -180,8 +184,8 @@ fn crates_dropped_on_a_rope_bridge_stack_and_come_to_rest_on_it() {
         );
         assert!(errors.is_empty(), "every {every} s: {errors:?}");
         assert_eq!(last.len(), 5);
-        assert!(last.iter().all(|&(p, _)| (1.6..2.3).contains(&p.y)), "every {every} s: crates at {last:?}");
-        assert!(settled < 0.3, "every {every} s: a crate still moves at {settled} m/s");
+        assert!(last.iter().all(|&(p, _)| (1.6..2.3).contains(&p.y) && p.x.abs() < 3.0 && p.z.abs() < 0.6), "every {every} s: crates at {last:?}");
+        assert!(settled < 0.5, "every {every} s: a crate still moves at {settled} m/s");
     }
 }
 

@@ -48,7 +48,10 @@ pub struct NewtonSettings {
     /// elements or pair contacts). The tangent then lags by at most that
     /// correction, so the
     /// iterations converge linearly at a rate of that order, and the
-    /// convergence test is unchanged.
+    /// convergence test is unchanged. A chord correction larger than the
+    /// correction before it is not taken (the next iteration is a full
+    /// pass at the same iterate), and one that shrinks by less than
+    /// a factor of 10 turns chords off for the rest of the solve.
     pub chord_limit: f64,
 }
 
@@ -255,8 +258,11 @@ fn iterate_exactly<S: SecondOrderSystem + ?Sized>(
         iteration += 1;
         done = iteration;
         update_coordinates(ws, c_q, c_v);
+        // Whether `ws.dx` is a chord's correction (a line search below
+        // replaces it with a full pass's).
+        let mut from_chord = chord;
         if chord {
-            chord_pass(sys, ws, map, stats)?;
+            from_chord = chord_pass(sys, ws, map, stats)?;
         } else {
             pass(sys, ws, map, stats)?;
         }
@@ -279,6 +285,7 @@ fn iterate_exactly<S: SecondOrderSystem + ?Sized>(
                     alpha = next;
                     update_coordinates(ws, c_q, c_v);
                     pass(sys, ws, map, stats)?;
+                    from_chord = false;
                     stats.line_search_evals += 1;
                     let g = -dot(&ws.r, &ws.dx_prev);
                     if g.abs() <= 0.5 * g0.abs() {
@@ -294,17 +301,32 @@ fn iterate_exactly<S: SecondOrderSystem + ?Sized>(
         }
         let mut converged = true;
         let mut largest = 0.0f64;
+        let mut finite = true;
         for i in 0..ws.x.len() {
             let d = ws.dx[i];
-            if !d.is_finite() {
-                return Err(IntegrateError::NonFinite { t }.into());
-            }
+            finite &= d.is_finite();
             let dq = (c_q * d).abs();
             largest = largest.max(dq);
             let dv = (c_v * d).abs();
             if dq > tol + rel * ws.q[i].abs() || dv > vel_tol + rel * ws.v[i].abs() {
                 converged = false;
             }
+        }
+        if from_chord && !(finite && largest <= last_largest) {
+            // A chord correction that does not contract (the tangent
+            // changed too much since its elimination) is not taken: the
+            // iterate stays, chords stop for this solve, and the next
+            // iteration is a full pass there. Taken, it moved a damped
+            // rope lying in a horizontal arc so far from the solution at
+            // its first step (a 50 times larger correction) that Newton
+            // failed at every split.
+            no_chords = true;
+            chord = false;
+            pending = None;
+            continue;
+        }
+        if !finite {
+            return Err(IntegrateError::NonFinite { t }.into());
         }
         if converged && !one_shot && sys.tangent_fell_back() {
             // Not a Newton step: finish with the exact tangent.
@@ -321,7 +343,7 @@ fn iterate_exactly<S: SecondOrderSystem + ?Sized>(
             update_coordinates(ws, c_q, c_v);
             return Ok(());
         }
-        if chord && largest > CHORD_CONTRACTION * last_largest {
+        if from_chord && largest > CHORD_CONTRACTION * last_largest {
             no_chords = true;
         }
         last_largest = largest;
@@ -359,8 +381,9 @@ fn pass<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, map: Aff
 /// A chord iteration at the current `ws.q`, `ws.v`, `ws.x`: the residual,
 /// then the correction solved with the last elimination
 /// ([`SecondOrderSystem::resolve_last_tangent`]): `ws.r = −r`, `ws.dx` the
-/// correction.
-fn chord_pass<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, map: Affine, stats: &mut StepStats) -> Result<(), Failure> {
+/// correction. Answers whether it was a chord (`false`: the system could
+/// not re-solve, and a full pass was made).
+fn chord_pass<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, map: Affine, stats: &mut StepStats) -> Result<bool, Failure> {
     let t = map.t;
     sys.residual(t, &ws.q, &ws.v, &ws.x, &mut ws.r).map_err(|source| Failure::Error(IntegrateError::System { t, source }))?;
     stats.residual_evals += 1;
@@ -371,10 +394,11 @@ fn chord_pass<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, ma
         return Err(IntegrateError::NonFinite { t }.into());
     }
     if !sys.resolve_last_tangent(&ws.r, &mut ws.dx) {
-        return pass(sys, ws, map, stats);
+        pass(sys, ws, map, stats)?;
+        return Ok(false);
     }
     stats.chord_iterations += 1;
-    Ok(())
+    Ok(true)
 }
 
 /// `x += dx`, or, when `own_update` is asked for and `c_q > 0`, through
