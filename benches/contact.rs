@@ -10,7 +10,9 @@
 //! system) against the same ropes lying apart. A 1 000-element (and a
 //! 100-element) rope coiled flat on the ground, its turns apart (ground
 //! contacts only) or touching (a pair contact between neighbouring turns),
-//! against the same coil without contact.
+//! against the same coil without contact. The 1 000-element hoist
+//! pendulum in a level of 1 000 fixed or dynamic crates far from it,
+//! against the same without crates (and without the rope's contacts).
 
 use bevy_rapier_cable::cable::preset;
 use bevy_rapier_cable::scenario;
@@ -274,6 +276,23 @@ path = [{points}]
     w
 }
 
+/// The hoist pendulum of `assets/scenarios/perf_swing_1000.toml` (20 m of
+/// 20 mm steel rope in 1 000 elements, a 1 t ball released at 30°; the
+/// rope's contacts on or off) in a level of `bodies` crates (1 m cubes,
+/// 50 kg when `dynamic`, else fixed) on a ground box, in a 32-wide grid
+/// 20 m and more from the rope: colliders the rope never comes near.
+fn far_bodies_world(bodies: usize, dynamic: bool, contacts: bool) -> World {
+    let pendulum = include_str!("../assets/scenarios/perf_swing_1000.toml");
+    let mut src = if contacts { pendulum.to_string() } else { pendulum.replace("[[cable]]\n", "[[cable]]\ncontacts = false\n") };
+    src += "\n[[body]]\nname = \"ground\"\ntype = \"fixed\"\nshape = \"cuboid\"\nhalf_extents = [60.0, 0.5, 60.0]\nposition = [0.0, -0.5, 0.0]\n";
+    for k in 0..bodies {
+        let (x, z) = (-50.0 + (k % 32) as f64 * 3.0, 20.0 + (k / 32) as f64 * 3.0);
+        let kind = if dynamic { "dynamic\"\nmass = 50.0" } else { "fixed\"" };
+        src += &format!("\n[[body]]\nname = \"crate{k}\"\ntype = \"{kind}\nshape = \"cuboid\"\nhalf_extents = [0.5, 0.5, 0.5]\nposition = [{x}, 0.5, {z}]\n");
+    }
+    settled(&src, "far_bodies_bench.toml")
+}
+
 /// One frame step of the world `make` builds, as the benchmark `id` of
 /// `g`; built (and settled) on the benchmark's first run only, so that a
 /// filter that skips it skips the settling too.
@@ -308,6 +327,13 @@ fn contact(c: &mut Criterion<cpu_time::ThreadCpuTime>) {
         for (name, contacts) in [("friction", Some(0.4)), ("frictionless", Some(0.0)), ("no_contacts", None)] {
             bench_step(&mut g, BenchmarkId::new(name, n), || world(n, contacts));
         }
+    }
+    g.finish();
+    let mut g = c.benchmark_group("contact/far_bodies_step");
+    for (name, bodies, dynamic, contacts) in
+        [("none", 0, false, true), ("fixed_1000", 1000, false, true), ("dynamic_1000", 1000, true, true), ("dynamic_1000_no_contacts", 1000, true, false)]
+    {
+        bench_step(&mut g, BenchmarkId::new(name, 1000), || far_bodies_world(bodies, dynamic, contacts));
     }
     g.finish();
     let mut g = c.benchmark_group("contact/coiled_rope_step");

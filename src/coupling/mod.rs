@@ -1630,6 +1630,7 @@ fn cable_islands(
     }
     let list: Vec<(&Cable, &CableContact)> = candidates.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
     let (pairs, mut approach) = contact::rope_pairs(&list, h, false);
+    let extents: Vec<contact::CableExtent> = list.iter().map(|(cable, _)| contact::CableExtent::of(cable)).collect();
     // Nodes 0.. are the candidates, then the free bodies.
     let nodes = candidates.len() + free.len();
     let mut root: Vec<usize> = (0..nodes).collect();
@@ -1655,7 +1656,7 @@ fn cable_islands(
         let shapes = contact::BodyShapes::of(rb, colliders);
         let (origin, rotation) = pose_of(rb);
         for (c, (cable, settings)) in list.iter().enumerate() {
-            let (touches, closing) = contact::body_pairs(cable, settings, c, &shapes, (origin, rotation), speed, 0, FreeBody::LINK, h);
+            let (touches, closing) = contact::body_pairs((cable, &extents[c]), settings, c, &shapes, (origin, rotation), speed, 0, FreeBody::LINK, h);
             if !touches.is_empty() {
                 join(&mut root, c, candidates.len() + k);
                 approach[c] = approach[c].max(closing);
@@ -1891,6 +1892,7 @@ fn island_passes(
         let listed: Vec<usize> = members.iter().copied().filter(|&i| cables[i].contact.is_some()).collect();
         let list: Vec<(&Cable, &CableContact)> = listed.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
         let mut found = contact::rope_pairs(&list, hp, false).0;
+        let extents: Vec<contact::CableExtent> = list.iter().map(|(cable, _)| contact::CableExtent::of(cable)).collect();
         // The free bodies at the pass's start, as chains of their own.
         // (A body rapier no longer has keeps its state and gets no chain.)
         let mut chains: Vec<(usize, FreeBody)> = Vec::with_capacity(free.len());
@@ -1928,7 +1930,8 @@ fn island_passes(
             let shapes = contact::BodyShapes::of(rb, contacts.colliders);
             let speed = body.velocity.length() + body.angular_velocity.length() * contact::body_extent(rb, contacts.colliders);
             for (c, (cable, settings)) in list.iter().enumerate() {
-                let (pairs, _) = contact::body_pairs(cable, settings, c, &shapes, (body.origin, body.rotation), speed, index, FreeBody::LINK, hp);
+                let (pairs, _) =
+                    contact::body_pairs((cable, &extents[c]), settings, c, &shapes, (body.origin, body.rotation), speed, index, FreeBody::LINK, hp);
                 found.extend(pairs);
             }
             chains.push((b, chain));
