@@ -510,7 +510,7 @@ fn a_car_towing_a_trailer_on_a_rope_pulls_it_at_the_closed_form_tension() {
             app.world_mut().get_mut::<ExternalForce>(car).unwrap().force = Vec3::new(force, 0.0, 0.0);
         }
         app.update();
-        let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+        let errors: Vec<String> = plugin_app::cable_errors(&mut app);
         assert!(errors.is_empty(), "{errors:?}");
         if let Some(s) = app.world().get::<CableState>(cable) {
             let v = |e: Entity| f64::from(app.world().get::<Velocity>(e).unwrap().linear.x);
@@ -555,7 +555,7 @@ fn a_body_with_locked_axes_at_a_rope_start_stays_explicit() {
             .id();
         for _ in 0..3 {
             app.update();
-            let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+            let errors: Vec<String> = plugin_app::cable_errors(&mut app);
             assert!(errors.is_empty(), "{errors:?}");
         }
         let sim = app.world().get::<CableSim>(cable).expect("cable built");
@@ -611,7 +611,7 @@ fn a_car_towing_two_trailers_pulls_them_at_the_closed_form_tensions() {
             app.world_mut().get_mut::<ExternalForce>(car).unwrap().force = Vec3::new(force, 0.0, 0.0);
         }
         app.update();
-        let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+        let errors: Vec<String> = plugin_app::cable_errors(&mut app);
         assert!(errors.is_empty(), "{errors:?}");
         let (Some(s1), Some(s2)) = (app.world().get::<CableState>(first), app.world().get::<CableState>(second)) else { continue };
         let v = |e: Entity| f64::from(app.world().get::<Velocity>(e).unwrap().linear.x);
@@ -676,7 +676,7 @@ fn a_pushed_ball_on_a_steel_rope_swings_at_the_pendulum_amplitude() {
             app.world_mut().entity_mut(ball).insert(ExternalImpulse { impulse: Vec3::Z * impulse, torque_impulse: Vec3::ZERO });
         }
         app.update();
-        let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+        let errors: Vec<String> = plugin_app::cable_errors(&mut app);
         assert!(errors.is_empty(), "frame {frame}: {errors:?}");
         if frame >= 121 {
             z.push(f64::from(app.world().get::<Transform>(ball).unwrap().translation.z));
@@ -719,7 +719,7 @@ fn a_car_driven_by_velocity_writes_tows_its_trailer_at_the_friction_tension() {
         let v = (frame as f32 / 60.0).min(2.0);
         app.world_mut().get_mut::<Velocity>(car).unwrap().linear.x = v;
         app.update();
-        let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+        let errors: Vec<String> = plugin_app::cable_errors(&mut app);
         assert!(errors.is_empty(), "frame {frame}: {errors:?}");
         if frame > 240 {
             let s = app.world().get::<CableState>(cable).unwrap();

@@ -149,7 +149,7 @@ fn rope_bridge(every: f32) -> (Vec<Vec<(Vec3, Vec3)>>, Vec<String>) {
             app.world_mut().despawn(crates.remove(0));
         }
         app.update();
-        errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()));
+        errors.extend(plugin_app::cable_errors(&mut app));
         let w = app.world();
         rows.push(crates.iter().map(|&c| (w.get::<Transform>(c).unwrap().translation, w.get::<Velocity>(c).unwrap().linear)).collect());
     }
@@ -211,7 +211,7 @@ fn a_box_on_the_ground_under_a_rope_stays_on_the_ground() {
     let mut top = f32::NEG_INFINITY;
     for _ in 0..240 {
         app.update();
-        errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()));
+        errors.extend(plugin_app::cable_errors(&mut app));
         if let Some(s) = app.world().get::<CableState>(rope) {
             top = s.nodes.iter().map(|p| p.y).fold(top, f32::max);
         }
@@ -278,7 +278,7 @@ fn a_box_carrying_a_rope_slides_down_a_slope_at_the_coulomb_rate() {
     let (mut errors, mut speeds, mut on_box, mut creep) = (Vec::new(), Vec::new(), true, 0.0f32);
     for step in 1..=90 {
         app.update();
-        errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()));
+        errors.extend(plugin_app::cable_errors(&mut app));
         let v = app.world().get::<Velocity>(block).unwrap().linear;
         speeds.push((step, v.dot(down)));
         // The rope stays on the box: its nodes at the box's top (0.2 m
@@ -601,7 +601,7 @@ fn a_damped_box_carrying_a_rope_slows_at_the_damped_rate() {
     let (mut errors, mut speeds, mut creep, mut at) = (Vec::new(), Vec::new(), 0.0f32, None);
     for step in 1..=90 {
         app.update();
-        errors.extend(app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()));
+        errors.extend(plugin_app::cable_errors(&mut app));
         let (p, v) = (app.world().get::<Transform>(block).unwrap().translation, app.world().get::<Velocity>(block).unwrap().linear);
         speeds.push((step, v.x));
         if let Some(st) = app.world().get::<CableState>(rope) {

@@ -419,7 +419,7 @@ fn a_kinematic_hook_accelerating_up_lifts_its_payload_at_m_g_plus_a() {
                 app.world_mut().get_mut::<Velocity>(hook).unwrap().linear.y = a * t;
             }
             app.update();
-            let errors: Vec<String> = app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect();
+            let errors: Vec<String> = plugin_app::cable_errors(&mut app);
             assert!(errors.is_empty(), "{errors:?}");
             // (The cable is built at the first fixed step.)
             if let Some(state) = app.world().get::<CableState>(rope) {

@@ -4,7 +4,7 @@
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier_cable::plugin::CablePlugin;
+use bevy_rapier_cable::plugin::{CableError, CablePlugin};
 
 pub fn headless_app(dt: f32) -> App {
     let mut app = App::new();
@@ -15,4 +15,11 @@ pub fn headless_app(dt: f32) -> App {
     app.finish();
     app.cleanup();
     app
+}
+
+/// The `CableError` messages written since the last call, as text
+/// (drained: each is returned once).
+#[allow(dead_code)] // not every test binary reads errors
+pub fn cable_errors(app: &mut App) -> Vec<String> {
+    app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect()
 }
