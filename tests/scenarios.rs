@@ -1103,3 +1103,45 @@ end = {{ body = "crate", anchor = [0.0, 0.4, 0.0] }}
     let iterations = run(scene("damping = 0.01")).unwrap_or_else(|(t, e)| panic!("damped: stopped at {t} s: {e}"));
     println!("damped (τ = 0.01 s): ran 10 s at {iterations:.1} Newton iterations per step");
 }
+
+/// A cable's `linear_damping` and `angular_damping` (1/s) reach the rope
+/// (`RopeBuilder::velocity_damping`): a free 4 m steel rope (both ends
+/// free, laid along x) with c = 2 /s falls at v(t) = −(g/c)(1 − e^(−ct)),
+/// every node, over 2 s at 1/60 s (the model's own test,
+/// `slack::velocity_damping_matches_the_closed_form_fall`, bounds the
+/// same fall at 2e-3 of g/c); and without them it falls freely, −g t.
+#[test]
+fn a_cables_velocity_damping_fields_damp_its_fall_as_the_closed_form() {
+    for c in [2.0, 0.0] {
+        let src = format!(
+            r#"
+[simulation]
+duration = 2.0
+dt = 0.016666666666666666
+
+[[cable]]
+name = "rope"
+length = 4.0
+segments = 8
+diameter = 0.02
+material = "steel_wire_rope_6x36_iwrc"
+linear_damping = {c}
+angular_damping = {c}
+path = [[0.0, 0.0, 0.0], [4.0, 0.0, 0.0]]
+"#
+        );
+        let mut w = World::new(scenario::parse(&src, "damped_fall.toml").unwrap()).unwrap();
+        let mut worst = 0.0f64;
+        for _ in 0..120 {
+            w.step().unwrap();
+            let rope = w.cable("rope").unwrap();
+            let t = rope.time();
+            let exact = if c > 0.0 { -(9.81 / c) * (1.0 - (-c * t).exp()) } else { -9.81 * t };
+            for v in rope.node_velocities() {
+                worst = worst.max((v.y - exact).abs() / 9.81);
+            }
+        }
+        println!("c = {c} /s: largest velocity error {worst:.2e} × g·s");
+        assert!(worst < 2e-3, "c = {c}: {worst}");
+    }
+}

@@ -106,6 +106,11 @@ pub struct CableDescriptor {
     pub shear_stiffness: Option<f64>,
     /// Stiffness-proportional damping time constant, s.
     pub damping: f64,
+    /// Velocity damping of the rope's elements, linear, 1/s
+    /// ([`CableDescriptor::velocity_damping`]).
+    pub linear_damping: f64,
+    /// Velocity damping of the rope's elements, angular, 1/s.
+    pub angular_damping: f64,
     /// Tension-only axial law (default `true`: a rope cannot push);
     /// `false` keeps compression, for rods and beams
     /// ([`RopeBuilder::tension_only`](crate::cable::RopeBuilder::tension_only)).
@@ -242,6 +247,8 @@ impl CableDescriptor {
             material,
             shear_stiffness: None,
             damping: 0.0,
+            linear_damping: 0.0,
+            angular_damping: 0.0,
             tension_only: true,
             path: None,
             start,
@@ -324,6 +331,17 @@ impl CableDescriptor {
     /// spring's damper is `tau` times its stiffness).
     pub fn damping(mut self, tau: f32) -> Self {
         self.damping = tau as f64;
+        self
+    }
+
+    /// Velocity damping of the rope's elements, 1/s: each element feels
+    /// `−linear · m v` at its centre of mass and `−angular · I ω`, as
+    /// rapier's `Damping` does for a body (still-air drag, so that a slack
+    /// rope comes to rest; implicit, stable at any rate). Default 0
+    /// ([`RopeBuilder::velocity_damping`](crate::cable::RopeBuilder::velocity_damping)).
+    pub fn velocity_damping(mut self, linear: f32, angular: f32) -> Self {
+        self.linear_damping = linear as f64;
+        self.angular_damping = angular as f64;
         self
     }
 

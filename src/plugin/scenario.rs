@@ -363,6 +363,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
         let mut d = CableDescriptor::from_section(c.length, c.segments as usize, RopeMaterial::custom(section, c.diameter), start, end);
         d.shear_stiffness = c.shear_stiffness;
         d.damping = c.damping;
+        (d.linear_damping, d.angular_damping) = (c.linear_damping, c.angular_damping);
         d.tension_only = c.tension_only;
         d.contacts = c.contacts;
         d.friction = c.friction;

@@ -484,6 +484,11 @@ pub struct Cable {
     pub shear_stiffness: Option<f64>,
     /// Stiffness-proportional damping time constant, s (default 0).
     pub damping: f64,
+    /// Velocity damping of the rope's elements, linear, 1/s (default 0;
+    /// [`RopeBuilder::velocity_damping`](crate::cable::RopeBuilder::velocity_damping)).
+    pub linear_damping: f64,
+    /// Velocity damping of the rope's elements, angular, 1/s (default 0).
+    pub angular_damping: f64,
     /// Coulomb friction coefficient of its contacts (default 0.3).
     pub friction: f64,
     /// Normal drag coefficient (default 1.2).

@@ -360,6 +360,7 @@ fn cable_spec(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, rapier: &Rapi
     let section = RopeSection { linear_density: c.linear_density, ea: c.ea, ei: c.ei, ei2: c.ei2, gj: c.gj, min_breaking_load: 0.0 };
     let mut rope = RopeBuilder::new(c.length, c.segments as usize, section, c.diameter)
         .damping(c.damping)
+        .velocity_damping(c.linear_damping, c.angular_damping)
         .gravity(sc.simulation.gravity)
         .stress_free_shape(c.stress_free)
         .tension_only(c.tension_only);
