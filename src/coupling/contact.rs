@@ -760,17 +760,19 @@ pub(crate) fn add_contacts(
     let mut deepest: Option<Deepest> = None;
     let radius = 0.5 * cable.model.diameter;
     let gravity = cable.model.chain.gravity.length();
+    // Each rope's nodes and their velocities, read once (a read walks the
+    // rope).
+    let ropes: Vec<(usize, Vec<DVec3>, Vec<DVec3>)> = (0..cable.ropes()).filter_map(|r| cable.rope(r).map(|v| (r, v.nodes(), v.node_velocities()))).collect();
     // Only colliders near the cable: its nodes' box padded by the widest
     // element box below (`radius + reach`, at the fastest node).
-    let extent = CableExtent::of(cable);
+    let extent = CableExtent::of_nodes(ropes.iter().map(|(_, p, v)| (&p[..], &v[..])));
     let widest = 2.0 * radius + 2.0 * h * extent.fastest + h * h * gravity;
     let region = (extent.lo - DVec3::splat(widest), extent.hi + DVec3::splat(widest));
     let obstacles = Obstacle::all(world, bodies, exclude, (cable.time(), start), Some(region));
-    for rope in 0..cable.ropes() {
+    for (rope, nodes, velocities) in ropes {
         let Some(view) = cable.rope(rope) else {
             continue;
         };
-        let (nodes, velocities) = (view.nodes(), view.node_velocities());
         let layout = *view.layout();
         let element_length = layout.element_length;
         let n = nodes.len().saturating_sub(1);
@@ -1818,12 +1820,19 @@ pub(crate) struct CableExtent {
 impl CableExtent {
     /// The extent of `cable`'s ropes now.
     pub fn of(cable: &Cable) -> Self {
+        let ropes: Vec<(Vec<DVec3>, Vec<DVec3>)> = (0..cable.ropes()).filter_map(|r| cable.rope(r)).map(|v| (v.nodes(), v.node_velocities())).collect();
+        Self::of_nodes(ropes.iter().map(|(p, v)| (&p[..], &v[..])))
+    }
+
+    /// The extent of ropes given by their nodes (m) and the nodes'
+    /// velocities (m/s).
+    fn of_nodes<'n>(ropes: impl IntoIterator<Item = (&'n [DVec3], &'n [DVec3])>) -> Self {
         let mut e = CableExtent { lo: DVec3::INFINITY, hi: DVec3::NEG_INFINITY, fastest: 0.0 };
-        for view in (0..cable.ropes()).filter_map(|r| cable.rope(r)) {
-            for p in view.nodes() {
-                (e.lo, e.hi) = (e.lo.min(p), e.hi.max(p));
+        for (nodes, velocities) in ropes {
+            for p in nodes {
+                (e.lo, e.hi) = (e.lo.min(*p), e.hi.max(*p));
             }
-            e.fastest = view.node_velocities().iter().map(|v| v.length()).fold(e.fastest, f64::max);
+            e.fastest = velocities.iter().map(|v| v.length()).fold(e.fastest, f64::max);
         }
         e
     }
