@@ -198,3 +198,52 @@ fn a_rope_across_two_rails_sticks_below_the_friction_angle_and_slides_at_coulomb
         assert!((a / expected - 1.0).abs() < 2e-3, "{degrees}°, μ {mu}: a = {a} m/s² vs {expected}");
     }
 }
+
+/// `assets/scenarios/slack_rope_on_ground.toml`: a newcomer's slack rope
+/// between two points 3 m up and 10 m apart (12 m of 16 mm steel rope, laid
+/// as a horizontal parabola) swings down, grazes the ground at the bottom of
+/// its first swings, and comes to rest as the catenary, with its ends on
+/// soft anchors (`end_stiffness = 2`). It runs to the end; the energy never
+/// grows (1e-9 of it: the rounding of the sum); the middle never sinks
+/// into the ground by more than 1 mm; over the last second the middle's
+/// height is the catenary's (sag `a (cosh(S/2a) − 1)`, `L = 2a sinh(S/2a)`)
+/// and the first element's tension the catenary's `w a cosh(S/2a)` less
+/// the weight of the rope's rise to that element's middle (`w Δy`), each
+/// within 1 %. With the default anchor (1000 `EA/L_e`) it stopped at
+/// 0.95 s ("Newton did not converge").
+#[test]
+fn a_slack_rope_between_two_pins_swings_down_grazes_the_ground_and_hangs_as_the_catenary() {
+    let rows = run_shipped_variant("slack_rope_on_ground", "end_stiffness = 2.0", "end_stiffness = 2.0");
+    assert!((rows.last().unwrap()[0] - 12.0).abs() < 1e-9, "ran to {} s", rows.last().unwrap()[0]);
+    let e0 = rows[0][1];
+    let rise = rows.windows(2).map(|w| w[1][1] - w[0][1]).fold(f64::NEG_INFINITY, f64::max);
+    let lowest = rows.iter().map(|r| r[4]).fold(f64::INFINITY, f64::min);
+    // The catenary: L = 2a sinh(S/2a) for a by bisection.
+    let (l, span, w, top) = (12.0f64, 10.0f64, 0.004 * 16.0 * 16.0 * 9.81, 3.0);
+    let (mut lo, mut hi) = (0.5f64, 100.0f64);
+    for _ in 0..200 {
+        let a = 0.5 * (lo + hi);
+        if 2.0 * a * (0.5 * span / a).sinh() > l {
+            lo = a;
+        } else {
+            hi = a;
+        }
+    }
+    let a = lo;
+    let sag = a * ((0.5 * span / a).cosh() - 1.0);
+    // The first element's middle, 0.125 m along the rope from the pin:
+    // the catenary's slope there is close to the pin's, sinh(S/2a).
+    let slope = (0.5 * span / a).sinh();
+    let dy = 0.125 * slope / (1.0 + slope * slope).sqrt();
+    let t_first = w * a * (0.5 * span / a).cosh() - w * dy;
+    let late: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] > 11.0).collect();
+    let mean = |k: usize| late.iter().map(|r| r[k]).sum::<f64>() / late.len() as f64;
+    let (sag_sim, t_sim) = (top - mean(4), mean(2));
+    eprintln!(
+        "energy {e0:.2} J at the first step, largest rise per step {rise:.2e} J; lowest middle {lowest:.5} m; last second: sag {sag_sim:.4} m (catenary {sag:.4}), first element's tension {t_sim:.2} N ({t_first:.2})"
+    );
+    assert!(rise <= 1e-9 * e0, "the energy grew by {rise} J in a step");
+    assert!(lowest > 0.008 - 1e-3, "the rope's middle sank into the ground: {lowest} m");
+    assert!((sag_sim - sag).abs() < 1e-2 * sag, "sag {sag_sim} m, catenary {sag} m");
+    assert!((t_sim - t_first).abs() < 1e-2 * t_first, "first element's tension {t_sim} N, catenary {t_first} N");
+}

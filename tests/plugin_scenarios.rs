@@ -111,7 +111,7 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 34] = [
+const COMPARED: [&str; 35] = [
     "axial_bounce",
     "ball_hits_payload",
     "ball_on_rope",
@@ -141,6 +141,7 @@ const COMPARED: [&str; 34] = [
     "rope_over_box",
     "rope_over_cylinder",
     "rope_round_post",
+    "slack_rope_on_ground",
     "spin_up",
     "taut_string",
     "trolley_kick",
@@ -195,6 +196,7 @@ same_rows!(
     rope_over_box,
     rope_over_cylinder,
     rope_round_post,
+    slack_rope_on_ground,
     spin_up,
     taut_string,
     trolley_kick,

@@ -13,7 +13,10 @@ pub use self::chain::{
     SpringLaw, StaticError, SubJoint,
 };
 pub mod rope;
-pub use self::rope::{BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeLayout, RopeModel, RopePart, RopeStart, MAX_SEGMENTS, SLACK_STOP};
+pub use self::rope::{
+    BodyInChain, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeLayout, RopeModel, RopePart, RopeStart, END_ROTATION_STIFFNESS_FACTOR, END_STIFFNESS_FACTOR,
+    MAX_SEGMENTS, SLACK_STOP,
+};
 #[allow(clippy::module_inception)]
 pub mod cable;
 #[cfg(test)]

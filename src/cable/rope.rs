@@ -182,6 +182,33 @@ impl std::fmt::Debug for RopeEnd {
 /// 70–110 ms after the strike.
 pub const SLACK_STOP: f64 = 0.5;
 
+/// Default [`RopeBuilder::end_stiffness_factor`]: the implicit spring that
+/// pins a rope's end to a world point or a body is 1000 times the
+/// element's axial stiffness `EA/L_e`. The last element's axial spring is
+/// stiffened by `f/(f − 1)` (here 1.001) so that the two in series keep
+/// the rope's axial compliance exactly (since 2026-11-28; before, the
+/// anchor added 1/(1000 N) of the rope's compliance).
+///
+/// Why it is a setting (measured 2026-11-28, docs/architecture.md, "The
+/// end anchor's stiffness"): the anchor closes a loop through the whole
+/// rope in relative coordinates, and a stiff closure makes Newton's
+/// residual strongly nonlinear in every joint angle. A 12 m, 16 mm steel
+/// rope (48 elements, τ = 0.01 s) pinned 10 m apart, laid as a horizontal
+/// parabola and landing on the ground stops at 0.80 s at 1000 and runs
+/// its 12 s at 30 and below (82 Newton iterations per frame step at 10,
+/// 66 at 2); the same rope in the air takes 98 iterations per step at
+/// 1000 and 42 at 2. But a 20 kg ball resting on a damped taut rope
+/// jitters more on a softer anchor (fastest in each later second
+/// ≤ 2.7 cm/s at 1000, up to 2.9 at 300, 4.3 at 100, 5.1 at 30, 6.9 at
+/// 2; the ground case stops at 0.78 s at 300 and 6.0 s at 100): not
+/// understood, so the default stays.
+pub const END_STIFFNESS_FACTOR: f64 = 1e3;
+
+/// The rotational part of a clamped end's anchor, as a multiple of the
+/// last element's bending stiffness `max(EI, GJ)/L_e` (a compliance of
+/// 1/1000 of one joint's, not compensated).
+pub const END_ROTATION_STIFFNESS_FACTOR: f64 = 1e3;
+
 /// Most elements a rope may have (a 100 000-element rope takes about
 /// 0.55 GB, measured); more is refused with a
 /// [`RopeError::InvalidParameter`] instead of exhausting memory (2³¹
@@ -327,7 +354,7 @@ impl RopeBuilder {
             start: RopeStart::Pinned(BaseMotion::Fixed(BaseState::fixed(DMat3::IDENTITY, DVec3::ZERO))),
             end: RopeEnd::Free,
             gravity: DVec3::new(0.0, -9.81, 0.0),
-            end_stiffness_factor: 1e3,
+            end_stiffness_factor: END_STIFFNESS_FACTOR,
             stress_free_shape: false,
             tension_only: true,
             linear_damping: 0.0,
@@ -417,7 +444,11 @@ impl RopeBuilder {
         self
     }
     /// Stiffness of the implicit spring that pins an end to a world point,
-    /// as a multiple of the element axial stiffness `EA/L_e` (default 1000).
+    /// as a multiple of the element axial stiffness `EA/L_e` (default
+    /// [`END_STIFFNESS_FACTOR`], 1000; > 0). Above 1 the last element's axial
+    /// spring is stiffened to `f/(f − 1)·EA/L_e`, so that the two in series
+    /// keep the rope's axial compliance exactly; at 1 or below the anchor
+    /// adds `1/f` of one element's compliance.
     pub fn end_stiffness_factor(mut self, f: f64) -> Self {
         self.end_stiffness_factor = f;
         self
@@ -683,8 +714,27 @@ impl RopeBuilder {
         match &self.end {
             RopeEnd::Free => {}
             RopeEnd::Pinned(target) | RopeEnd::Clamped(target) => {
+                // The anchor spring in series with the last element's axial
+                // spring: that spring is stiffened so that the two together
+                // have the element's own compliance L_e/EA exactly.
+                let last_axial = first + ELEMENT_DOFS * (n - 1) + 3;
+                if self.end_stiffness_factor > 1.0 && joints.get(last_axial).is_some_and(|j| j.kind == JointKind::Prismatic && j.axis == DVec3::X) {
+                    let f = self.end_stiffness_factor;
+                    joints[last_axial].stiffness = s.ea / le * f / (f - 1.0);
+                    joints[last_axial].damping = tau * joints[last_axial].stiffness;
+                    // Laid stretched, the pair shares the element's stretch
+                    // in proportion to their compliances: the last element
+                    // keeps (f − 1)/f of it and the anchor spring takes the
+                    // rest, so that the rope starts with one tension along
+                    // it (the end node sits short of its pin by that rest).
+                    // (A slack element carries nothing: it stays as laid.)
+                    let rest = joints[last_axial].rest;
+                    if q0[last_axial] > rest || !self.tension_only {
+                        q0[last_axial] = rest + (q0[last_axial] - rest) * (f - 1.0) / f;
+                    }
+                }
                 let rotation = if matches!(self.end, RopeEnd::Clamped(_)) {
-                    let kr = self.end_stiffness_factor * s.ei.max(s.gj).max(1e-9) / le;
+                    let kr = END_ROTATION_STIFFNESS_FACTOR * s.ei.max(s.gj).max(1e-9) / le;
                     Some((rots[n - 1], kr, tau * kr))
                 } else {
                     None

@@ -111,6 +111,11 @@ pub struct CableDescriptor {
     pub linear_damping: f64,
     /// Velocity damping of the rope's elements, angular, 1/s.
     pub angular_damping: f64,
+    /// Stiffness of the implicit spring that pins an end to a world point
+    /// or a body, as a multiple of the element axial stiffness `EA/L_e`
+    /// ([`CableDescriptor::end_stiffness`]; default
+    /// [`END_STIFFNESS_FACTOR`](crate::cable::END_STIFFNESS_FACTOR), 1000).
+    pub end_stiffness: f64,
     /// Tension-only axial law (default `true`: a rope cannot push);
     /// `false` keeps compression, for rods and beams
     /// ([`RopeBuilder::tension_only`](crate::cable::RopeBuilder::tension_only)).
@@ -249,6 +254,7 @@ impl CableDescriptor {
             damping: 0.0,
             linear_damping: 0.0,
             angular_damping: 0.0,
+            end_stiffness: crate::cable::END_STIFFNESS_FACTOR,
             tension_only: true,
             path: None,
             start,
@@ -342,6 +348,19 @@ impl CableDescriptor {
     pub fn velocity_damping(mut self, linear: f32, angular: f32) -> Self {
         self.linear_damping = linear as f64;
         self.angular_damping = angular as f64;
+        self
+    }
+
+    /// Stiffness of the implicit spring that pins an end to a world point
+    /// or a body, as a multiple of the element axial stiffness `EA/L_e`
+    /// (> 0, dimensionless; default 1000). The last element's axial spring
+    /// is stiffened so that the two in series keep the rope's compliance
+    /// exactly. A soft anchor (2) lets a slack rope pinned at both ends
+    /// swing down and land on the ground where the default stops (see
+    /// [`RopeBuilder::end_stiffness_factor`](crate::cable::RopeBuilder::end_stiffness_factor)
+    /// for what it costs elsewhere).
+    pub fn end_stiffness(mut self, factor: f32) -> Self {
+        self.end_stiffness = factor as f64;
         self
     }
 

@@ -364,6 +364,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
         d.shear_stiffness = c.shear_stiffness;
         d.damping = c.damping;
         (d.linear_damping, d.angular_damping) = (c.linear_damping, c.angular_damping);
+        d.end_stiffness = c.end_stiffness;
         d.tension_only = c.tension_only;
         d.contacts = c.contacts;
         d.friction = c.friction;

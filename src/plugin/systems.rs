@@ -123,6 +123,7 @@ pub(crate) fn init_cables(
         let mut rope = RopeBuilder::new(d.length, d.segments, d.material.section(), d.material.diameter())
             .damping(d.damping)
             .velocity_damping(d.linear_damping, d.angular_damping)
+            .end_stiffness_factor(d.end_stiffness)
             .gravity(gravity)
             .stress_free_shape(d.stress_free)
             .tension_only(d.tension_only);

@@ -73,6 +73,7 @@ fn cable(ctx: &Ctx<'_>, raw: &S<RawCable>, bodies: &[Body], seen: &mut HashMap<S
         damping: ctx.check_or(&r.damping, o, "damping", Rule::NonNegative, "s", 0.0)?,
         linear_damping: ctx.check_or(&r.linear_damping, o, "linear_damping", Rule::NonNegative, "1/s", 0.0)?,
         angular_damping: ctx.check_or(&r.angular_damping, o, "angular_damping", Rule::NonNegative, "1/s", 0.0)?,
+        end_stiffness: ctx.check_or(&r.end_stiffness, o, "end_stiffness", Rule::Positive, "(multiple of EA/L_e)", crate::cable::END_STIFFNESS_FACTOR)?,
         friction: ctx.check_or(&r.friction, o, "friction", Rule::NonNegative, "", 0.3)?,
         drag_normal: ctx.check_or(&r.drag_normal, o, "drag_normal", Rule::NonNegative, "", 1.2)?,
         drag_tangential: ctx.check_or(&r.drag_tangential, o, "drag_tangential", Rule::NonNegative, "", 0.008)?,

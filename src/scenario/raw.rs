@@ -198,6 +198,7 @@ pub(crate) struct RawCable {
     pub damping: Option<S<f64>>,
     pub linear_damping: Option<S<f64>>,
     pub angular_damping: Option<S<f64>>,
+    pub end_stiffness: Option<S<f64>>,
     pub material: Option<S<String>>,
     pub friction: Option<S<f64>>,
     pub drag_normal: Option<S<f64>>,

@@ -489,6 +489,11 @@ pub struct Cable {
     pub linear_damping: f64,
     /// Velocity damping of the rope's elements, angular, 1/s (default 0).
     pub angular_damping: f64,
+    /// Stiffness of the implicit spring that pins an end to a world point
+    /// or a body, as a multiple of the element axial stiffness `EA/L_e`
+    /// (> 0; default 1000;
+    /// [`RopeBuilder::end_stiffness_factor`](crate::cable::RopeBuilder::end_stiffness_factor)).
+    pub end_stiffness: f64,
     /// Coulomb friction coefficient of its contacts (default 0.3).
     pub friction: f64,
     /// Normal drag coefficient (default 1.2).

@@ -361,6 +361,7 @@ fn cable_spec(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, rapier: &Rapi
     let mut rope = RopeBuilder::new(c.length, c.segments as usize, section, c.diameter)
         .damping(c.damping)
         .velocity_damping(c.linear_damping, c.angular_damping)
+        .end_stiffness_factor(c.end_stiffness)
         .gravity(sc.simulation.gravity)
         .stress_free_shape(c.stress_free)
         .tension_only(c.tension_only);
