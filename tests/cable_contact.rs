@@ -209,8 +209,10 @@ fn a_rope_across_two_rails_sticks_below_the_friction_angle_and_slides_at_coulomb
 /// height is the catenary's (sag `a (cosh(S/2a) − 1)`, `L = 2a sinh(S/2a)`)
 /// and the first element's tension the catenary's `w a cosh(S/2a)` less
 /// the weight of the rope's rise to that element's middle (`w Δy`), each
-/// within 1 %. With the default anchor (1000 `EA/L_e`) it stopped at
-/// 0.95 s ("Newton did not converge").
+/// within 1 %. (With the default anchor, 1000 `EA/L_e`, it stopped at
+/// 0.95 s, "Newton did not converge", until a failed contact pass was
+/// taken again with its contacts found more often; it now runs there too,
+/// at 39 Newton iterations per step against 16.)
 #[test]
 fn a_slack_rope_between_two_pins_swings_down_grazes_the_ground_and_hangs_as_the_catenary() {
     let rows = run_shipped_variant("slack_rope_on_ground", "end_stiffness = 2.0", "end_stiffness = 2.0");
@@ -246,29 +248,4 @@ fn a_slack_rope_between_two_pins_swings_down_grazes_the_ground_and_hangs_as_the_
     assert!(lowest > 0.008 - 1e-3, "the rope's middle sank into the ground: {lowest} m");
     assert!((sag_sim - sag).abs() < 1e-2 * sag, "sag {sag_sim} m, catenary {sag} m");
     assert!((t_sim - t_first).abs() < 1e-2 * t_first, "first element's tension {t_sim} N, catenary {t_first} N");
-}
-
-/// The same rope on the default end anchors (1000 `EA/L_e`) stops when it
-/// lands (0.95 s); the error keeps the results so far and says what lets
-/// such a run go on: softer end anchors, by the field's name in each API.
-#[test]
-fn a_slack_rope_that_stops_on_stiff_end_anchors_is_told_to_soften_them() {
-    let shipped = std::fs::read_to_string("assets/scenarios/slack_rope_on_ground.toml").unwrap();
-    assert!(shipped.contains("end_stiffness = 2.0"));
-    let source = shipped.replace("end_stiffness = 2.0", "end_stiffness = 1000.0");
-    let sc = scenario::parse(&source, "slack_rope_on_ground.toml").unwrap_or_else(|e| panic!("{e}"));
-    let mut world = bevy_rapier_cable::sim::World::new(sc).unwrap_or_else(|e| panic!("{e}"));
-    let mut failure = None;
-    for _ in 0..720 {
-        if let Err(e) = world.step() {
-            failure = Some(e.to_string());
-            break;
-        }
-    }
-    let message = failure.expect("the run on stiff end anchors was expected to stop when the rope lands");
-    eprintln!("at t = {:.3} s: {message}", world.time);
-    assert!(world.time > 0.5 && world.time < 1.5, "stopped at {} s", world.time);
-    for needle in ["Newton did not converge", "stiff anchor spring (1000 times", "end_stiffness", "CableDescriptor::end_stiffness", "end_stiffness_factor"] {
-        assert!(message.contains(needle), "the message does not say `{needle}`: {message}");
-    }
 }

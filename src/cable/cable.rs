@@ -18,14 +18,6 @@ fn inside_where(node: usize, element: Option<usize>) -> String {
     }
 }
 
-/// End anchors stiffer than this multiple of the element axial stiffness
-/// `EA/L_e` get the soft-anchor advice when Newton fails
-/// ([`CableError::StiffEndAnchors`]): the ground landing of
-/// `assets/scenarios/slack_rope_on_ground.toml` runs at 30 and below and
-/// stops at 100 and above (docs/architecture.md, "The end anchor's
-/// stiffness").
-pub const STIFF_END_ANCHOR: f64 = 30.0;
-
 /// Why a cable step failed.
 #[derive(Debug, Clone, PartialEq, Error)]
 #[non_exhaustive]
@@ -56,22 +48,6 @@ pub enum CableError {
     UndampedSlack {
         /// What the integrator reported.
         source: IntegrateError,
-    },
-    /// The integrator did not converge on a rope whose end is pinned to a
-    /// stiff implicit anchor spring (more than [`STIFF_END_ANCHOR`] times
-    /// an element's axial stiffness): the error, with the advice that often
-    /// lets such a run go on (soft end anchors; `docs/architecture.md`,
-    /// "The end anchor's stiffness").
-    #[error(
-        "{source}; the rope's end is pinned by a stiff anchor spring ({factor:.0} times an element's axial stiffness), \
-         which closes a loop through the whole rope that Newton struggles with. Softer end anchors, an end stiffness of 2 (`CableDescriptor::end_stiffness`, \
-         scenario `end_stiffness`, `RopeBuilder::end_stiffness_factor`; the rope's compliance stays exact), often let such a run go on"
-    )]
-    StiffEndAnchors {
-        /// What the integrator reported.
-        source: IntegrateError,
-        /// The stiffest end anchor, as a multiple of `EA/L_e`.
-        factor: f64,
     },
     /// [`Cable::solve_static`] on a tension-only rope: the equilibrium on
     /// the taut branch needs an element to push, which a rope cannot.
@@ -202,14 +178,6 @@ impl Cable {
 
     /// Whether the chain has tension-only elements without damping, and
     /// one of them is slack in the current state.
-    /// The stiffest end anchor spring as a multiple of the element axial
-    /// stiffness `EA/L_e`, if it is above [`STIFF_END_ANCHOR`].
-    fn stiff_end_anchor(&self) -> Option<f64> {
-        let k = self.model.section.ea / self.model.layout.element_length;
-        let factor = self.model.chain.anchors().iter().map(|a| a.stiffness / k).fold(0.0f64, f64::max);
-        (k > 0.0 && factor > STIFF_END_ANCHOR).then_some(factor)
-    }
-
     fn undamped_and_slack(&self) -> bool {
         let (q, v) = (&self.state.q, &self.state.v);
         self.model.chain.joints().iter().enumerate().any(|(s, j)| {
@@ -231,9 +199,6 @@ impl Cable {
                 self.refresh();
                 if matches!(e, IntegrateError::NotConverged { .. }) && self.undamped_and_slack() {
                     return Err(CableError::UndampedSlack { source: e });
-                }
-                if let Some(factor) = self.stiff_end_anchor().filter(|_| matches!(e, IntegrateError::NotConverged { .. })) {
-                    return Err(CableError::StiffEndAnchors { source: e, factor });
                 }
                 return Err(e.into());
             }

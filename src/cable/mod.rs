@@ -21,4 +21,4 @@ pub use self::rope::{
 pub mod cable;
 #[cfg(test)]
 mod tangent_tests;
-pub use self::cable::{Cable, CableError, ElementForces, LinkVelocity, RopeView, STIFF_END_ANCHOR};
+pub use self::cable::{Cable, CableError, ElementForces, LinkVelocity, RopeView};

@@ -193,15 +193,16 @@ pub const SLACK_STOP: f64 = 0.5;
 /// end anchor's stiffness"): the anchor closes a loop through the whole
 /// rope in relative coordinates, and a stiff closure makes Newton's
 /// residual strongly nonlinear in every joint angle. A 12 m, 16 mm steel
-/// rope (48 elements, τ = 0.01 s) pinned 10 m apart, laid as a horizontal
-/// parabola and landing on the ground stops at 0.80 s at 1000 and runs
-/// its 12 s at 30 and below (82 Newton iterations per frame step at 10,
-/// 66 at 2); the same rope in the air takes 98 iterations per step at
-/// 1000 and 42 at 2. But a 20 kg ball resting on a damped taut rope
-/// jitters more on a softer anchor (fastest in each later second
-/// ≤ 2.7 cm/s at 1000, up to 2.9 at 300, 4.3 at 100, 5.1 at 30, 6.9 at
-/// 2; the ground case stops at 0.78 s at 300 and 6.0 s at 100): not
-/// understood, so the default stays.
+/// rope (48 elements, τ = 0.01 s) pinned 10 m apart and laid as a
+/// horizontal parabola takes 98 Newton iterations per frame step in the
+/// air at 1000 and 42 at 2; with still-air drag, landing on the ground and
+/// coming to rest (`slack_rope_on_ground.toml`), 39 at 1000 and 16 at 2.
+/// (Landing on the ground it stopped at 0.80 s at 1000 until a failed
+/// contact pass was taken again with its contacts found more often, the
+/// same day.) But a 20 kg ball resting on a damped taut rope jitters more
+/// on a softer anchor (fastest in each later second ≤ 2.7 cm/s at 1000,
+/// up to 2.9 at 300, 4.3 at 100, 5.1 at 30, 6.9 at 2): not understood,
+/// so the default stays.
 pub const END_STIFFNESS_FACTOR: f64 = 1e3;
 
 /// The rotational part of a clamped end's anchor, as a multiple of the

@@ -200,6 +200,12 @@ impl FrictionMemory {
         self.anchors.get(&site).map(|x| x.1).filter(|old| (old - f).abs() < 0.1).unwrap_or(f)
     }
 
+    /// Whether this step (or pass) has any contact: with a collider, a
+    /// carried body's, or a pair of the cable's own ropes.
+    pub(crate) fn has_contacts(&self) -> bool {
+        !self.step.is_empty() || !self.pair_step.is_empty()
+    }
+
     /// Notes this step's next contact (its force element the next one
     /// added): at `site`, `fraction` along its element, with the friction
     /// coefficient `mu` (none if 0). [`FrictionMemory::attach`] gives it
