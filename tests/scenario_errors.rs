@@ -777,3 +777,18 @@ fn output_interval_refusal_shows_distinguishable_values() {
     let e = check(&src, 4, 19, "must be at least `dt` = 0.016666666666666666 s, found 0.01666666666666666 s");
     println!("{e}");
 }
+
+/// A cable's `end_stiffness` (a multiple of `EA/L_e`) must be positive
+/// and finite: 0, a negative value or NaN is refused with its name, unit
+/// and place; a valid one reaches the cable.
+#[test]
+fn end_stiffness_out_of_range_is_refused() {
+    let with = |v: &str| replace("segments = 10", &format!("segments = 10\nend_stiffness = {v}"));
+    check(&with("0"), 17, 17, "`end_stiffness` must be greater than 0 (multiple of EA/L_e), found 0");
+    check(&with("-2"), 17, 17, "`end_stiffness` must be greater than 0");
+    check(&with("nan"), 17, 17, "`end_stiffness`");
+    let sc = parse(&with("2.5"), "ok.toml").unwrap();
+    assert_eq!(sc.cables[0].end_stiffness, 2.5);
+    let sc = parse(BASE, "ok.toml").unwrap();
+    assert_eq!(sc.cables[0].end_stiffness, bevy_rapier_cable::cable::END_STIFFNESS_FACTOR);
+}

@@ -1442,8 +1442,8 @@ pub fn step_cables(
     // rapier (every body a cable reads was sampled or handed over above),
     // so they may run at once; the results do not depend on the order.
     // A cable alone takes its passes (one, unless its contacts close
-    // fast); a pass that fails is taken again with its contacts found
-    // more often (`advance_alone`).
+    // fast); a step that fails is taken again from where it failed with
+    // its contacts found more often (`retry_alone`, `advance_alone`).
     let advance = |cc: &mut CoupledCable| {
         if !cc.failed {
             advance_by(cc, h, n);
@@ -1530,8 +1530,6 @@ pub fn step_cables(
     failures
 }
 
-/// Steps `cc`'s cable by `h` (s) in `n` equal sub-steps; on a failure, records it
-/// with the failing sub-step's time and returns `false`.
 /// Steps a cable that is alone (in no island) by `h` (s) in `count`
 /// contact passes of `n` sub-steps each, its contacts found again at each
 /// pass's start (with `found`, the first pass keeps those found at the
@@ -1603,6 +1601,8 @@ fn passes_alone(
     true
 }
 
+/// Steps `cc`'s cable by `h` (s) in `n` equal sub-steps; on a failure, records it
+/// with the failing sub-step's time and returns `false`.
 fn advance_by(cc: &mut CoupledCable, h: f64, n: u32) -> bool {
     let t = cc.cable.time();
     let hs = h / n as f64;
