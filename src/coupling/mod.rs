@@ -1451,12 +1451,14 @@ pub fn step_cables(
     };
     if passes.iter().zip(&alone).all(|(&p, &a)| p == 1 || !a) {
         let mut loners: Vec<&mut CoupledCable> = cables.iter_mut().zip(&alone).filter(|(_, a)| **a).map(|(c, _)| &mut **c).collect();
-        let starts: Vec<f64> = loners.iter().map(|cc| cc.cable.time()).collect();
+        // Each one's start, and whether a failure was recorded before its
+        // advance (an impulse it could not take): that one is not retried.
+        let starts: Vec<(f64, bool)> = loners.iter().map(|cc| (cc.cable.time(), cc.advance_failure.is_some())).collect();
         each.for_each(&mut loners, &advance);
         // (The retries one by one: the contact search is not shared
         // between threads.)
-        for (cc, &start) in loners.iter_mut().zip(&starts) {
-            if cc.advance_failure.is_some() {
+        for (cc, &(start, before)) in loners.iter_mut().zip(&starts) {
+            if cc.advance_failure.is_some() && !before {
                 retry_alone(cc, &contacts, bodies, (start, start + h), 1, n);
             }
         }
@@ -1548,7 +1550,10 @@ pub fn step_cables(
 fn advance_alone(cc: &mut CoupledCable, contacts: &Contacts<'_>, bodies: &rp::RigidBodySet, h: f64, count: u32, n: u32, found: bool) -> bool {
     let start = cc.cable.time();
     let count = count.max(1);
-    passes_alone(cc, contacts, bodies, (start, h), count, n, found) || retry_alone(cc, contacts, bodies, (start, start + h), count, n)
+    // (A failure recorded before the advance, an impulse the cable could
+    // not take, is not retried.)
+    let before = cc.advance_failure.is_some();
+    passes_alone(cc, contacts, bodies, (start, h), count, n, found) || (!before && retry_alone(cc, contacts, bodies, (start, start + h), count, n))
 }
 
 /// [`advance_alone`]'s retry after a pass of `count` failed in the step
