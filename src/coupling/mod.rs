@@ -400,7 +400,8 @@ pub struct CoupledCable {
     /// collected in cable order after every cable advanced.
     advance_failure: Option<(f64, CableError)>,
     /// This step's bodies the cable's contacts leave out (its own bodies
-    /// and a trolley's rail), for the contact passes of a retried step.
+    /// and a trolley's rail; none with contacts off), for every contact
+    /// pass of the step and the free bodies' search.
     own: Vec<rp::RigidBodyHandle>,
 }
 
@@ -1360,10 +1361,9 @@ pub fn step_cables(
     // Contacts of the rope elements with rapier's colliders, frozen for the
     // step (the cable's own bodies excluded), and how many contact passes
     // each cable's step needs (see `contact_passes`).
-    let mut owns: Vec<Vec<rp::RigidBodyHandle>> = Vec::with_capacity(cables.len());
     let mut passes: Vec<u32> = Vec::with_capacity(cables.len());
     for (ci, cc) in cables.iter_mut().enumerate() {
-        let mut own = Vec::new();
+        cc.own.clear();
         let mut count = 1;
         if !cc.failed {
             // (The last step's contacts were cleared above.)
@@ -1381,7 +1381,6 @@ pub fn step_cables(
                 if let Err(e) = cc.cable.recompute_acceleration() {
                     cc.failed = true;
                     failures.push((ci, cc.cable.time(), e));
-                    owns.push(own);
                     passes.push(count);
                     continue;
                 }
@@ -1393,9 +1392,10 @@ pub fn step_cables(
                     Role::Trolley { joint, .. } => joints.get(*joint).map(|j| [j.body1(), j.body2()]),
                     _ => None,
                 });
-                own = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).chain(rails.flatten()).collect();
+                let own: Vec<rp::RigidBodyHandle> = cc.all_roles().map(|(b, _)| *b).chain(cc.carried.iter().map(|c| c.body)).chain(rails.flatten()).collect();
+                cc.own = own;
                 let start = cc.cable.time();
-                let (ropes, deepest) = contact::add_contacts(&mut cc.cable, &settings, &mut cc.friction, &contacts, bodies, &own, h, start);
+                let (ropes, deepest) = contact::add_contacts(&mut cc.cable, &settings, &mut cc.friction, &contacts, bodies, &cc.own, h, start);
                 // A rope laid into a collider is refused at its first step
                 // (`CableError::StartsInside`).
                 let radius = 0.5 * cc.cable.model.diameter;
@@ -1410,24 +1410,21 @@ pub fn step_cables(
                         start,
                         CableError::StartsInside { rope: d.rope, node: d.node, element: d.element, point: d.point, depth: d.depth, radius },
                     ));
-                    owns.push(own);
                     passes.push(count);
                     continue;
                 }
                 let ropes = ropes.max(contact::add_self_contacts(&mut cc.cable, &settings, &mut cc.friction, h));
-                let (any, carried) = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, &own, h, start);
+                let (any, carried) = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, &contacts, bodies, &cc.own, h, start);
                 cc.body_contacts = any;
                 cc.friction.attach(&mut cc.cable.model.chain, cc.fixed_forces);
                 count = contact_passes(ropes.max(carried), h);
             }
         }
-        cc.own.clone_from(&own);
-        owns.push(own);
         passes.push(count);
     }
     // Ropes of different cables that touch: such cables form an island,
     // stepped as one system (`advance_island`).
-    let free = free_bodies(cables, bodies, &owns, &contacts);
+    let free = free_bodies(cables, bodies, &contacts);
     let islands = cable_islands(cables, &free, bodies, contacts.colliders, h);
     let mut alone = vec![true; cables.len()];
     for island in &islands {
@@ -1475,7 +1472,7 @@ pub fn step_cables(
     }
     for island in &islands {
         let count = island.members.iter().map(|&i| passes[i]).max().unwrap_or(1).max(island.passes);
-        advance_island(cables, island, &owns, &contacts, bodies, inputs, h, count, n);
+        advance_island(cables, island, &contacts, bodies, inputs, h, count, n);
     }
     for (ci, cc) in cables.iter_mut().enumerate() {
         if let Some((time, e)) = cc.advance_failure.take() {
@@ -1592,9 +1589,7 @@ fn passes_alone(
     let hp = span / count as f64;
     for k in 0..count {
         if let Some(settings) = cc.contact.filter(|_| !(k == 0 && found)) {
-            let own = std::mem::take(&mut cc.own);
-            find_contacts(cc, &settings, contacts, bodies, &own, hp, step_start);
-            cc.own = own;
+            find_contacts(cc, &settings, contacts, bodies, hp, step_start);
         }
         if !advance_by(cc, hp, n) {
             return false;
@@ -1622,22 +1617,14 @@ fn advance_by(cc: &mut CoupledCable, h: f64, n: u32) -> bool {
 
 /// This pass's contacts of `cc` (its ropes and carried bodies against
 /// rapier's colliders, its ropes against themselves), found again at the
-/// pass's start with the pass's speculative reach (`hp` s).
-#[allow(clippy::too_many_arguments)]
-fn find_contacts(
-    cc: &mut CoupledCable,
-    settings: &CableContact,
-    contacts: &Contacts<'_>,
-    bodies: &rp::RigidBodySet,
-    own: &[rp::RigidBodyHandle],
-    hp: f64,
-    start: f64,
-) {
+/// pass's start with the pass's speculative reach (`hp` s), leaving out
+/// the cable's own bodies (`own`).
+fn find_contacts(cc: &mut CoupledCable, settings: &CableContact, contacts: &Contacts<'_>, bodies: &rp::RigidBodySet, hp: f64, start: f64) {
     contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
     cc.friction.discard_step();
-    contact::add_contacts(&mut cc.cable, settings, &mut cc.friction, contacts, bodies, own, hp, start);
+    contact::add_contacts(&mut cc.cable, settings, &mut cc.friction, contacts, bodies, &cc.own, hp, start);
     contact::add_self_contacts(&mut cc.cable, settings, &mut cc.friction, hp);
-    cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, contacts, bodies, own, hp, start).0;
+    cc.body_contacts = contact::add_body_contacts(&mut cc.cable, &cc.carried, &mut cc.friction, contacts, bodies, &cc.own, hp, start).0;
     cc.friction.attach(&mut cc.cable.model.chain, cc.fixed_forces);
 }
 
@@ -1669,18 +1656,13 @@ fn held_by_cables(cables: &[&mut CoupledCable]) -> Vec<rp::RigidBodyHandle> {
 /// body, follower or rail) and no joint holds ([`Contacts::jointed`]:
 /// obstacles), with colliders, that may touch a rope: each with a bound
 /// on its surface's speed (m/s).
-fn free_bodies(
-    cables: &[&mut CoupledCable],
-    bodies: &rp::RigidBodySet,
-    owns: &[Vec<rp::RigidBodyHandle>],
-    contacts: &Contacts<'_>,
-) -> Vec<(rp::RigidBodyHandle, f64)> {
+fn free_bodies(cables: &[&mut CoupledCable], bodies: &rp::RigidBodySet, contacts: &Contacts<'_>) -> Vec<(rp::RigidBodyHandle, f64)> {
     let colliders = contacts.colliders;
     if !any_contacts(cables) {
         return Vec::new();
     }
     let mut held = held_by_cables(cables);
-    held.extend(owns.iter().flatten().copied());
+    held.extend(cables.iter().flat_map(|cc| cc.own.iter().copied()));
     let mut free: Vec<(rp::RigidBodyHandle, f64)> = bodies
         .iter()
         .filter(|(h, rb)| rb.is_dynamic() && rb.is_enabled() && !held.contains(h) && !contacts.jointed.contains(h))
@@ -1823,7 +1805,6 @@ struct BodyPass {
 fn advance_island(
     cables: &mut [&mut CoupledCable],
     island: &Island,
-    owns: &[Vec<rp::RigidBodyHandle>],
     contacts: &Contacts<'_>,
     bodies: &mut rp::RigidBodySet,
     inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
@@ -1902,7 +1883,7 @@ fn advance_island(
     loop {
         let mut ends = starts.clone();
         let mut friction = memories.clone();
-        match island_passes(cables, members, &mut ends, &mut friction, owns, contacts, bodies, inputs, h, count, n) {
+        match island_passes(cables, members, &mut ends, &mut friction, contacts, bodies, inputs, h, count, n) {
             Ok(()) => {
                 cables[members[0]].free_friction = starts.iter().map(|b| b.handle).zip(friction).collect();
                 // The ropes' impulse on each free body, to rapier.
@@ -1948,7 +1929,6 @@ fn island_passes(
     members: &[usize],
     free: &mut [BodyPass],
     friction: &mut [contact::FrictionMemory],
-    owns: &[Vec<rp::RigidBodyHandle>],
     contacts: &Contacts<'_>,
     bodies: &rp::RigidBodySet,
     inputs: &dyn Fn(rp::RigidBodyHandle) -> BodyInputs,
@@ -1963,7 +1943,7 @@ fn island_passes(
         for &i in members {
             let cc = &mut *cables[i];
             if let Some(settings) = cc.contact {
-                find_contacts(cc, &settings, contacts, bodies, &owns[i], hp, start);
+                find_contacts(cc, &settings, contacts, bodies, hp, start);
             }
         }
         let t = cables[members[0]].cable.time();
