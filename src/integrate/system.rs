@@ -208,6 +208,20 @@ pub trait SecondOrderSystem {
     fn tangent_fell_back(&self) -> bool {
         false
     }
+
+    /// The mechanical energy at `(t, q, v)` of a **passive** system, in
+    /// its three parts `[kinetic, gravitational, elastic]` (J): one that
+    /// nothing outside does work on (supports at rest, no loads or drives;
+    /// gravity and springs conservative, dampers dissipative), so that its
+    /// energy cannot grow. The integrator then refuses a sub-step whose
+    /// energy grows by more than [`ENERGY_RISE`](super::ENERGY_RISE) of the
+    /// energy its parts exchanged over it, and splits the step: on a
+    /// whipping slack rope the discrete step can gain energy where the
+    /// motion is not resolved. `None` (the default): not passive, or not
+    /// known; nothing is checked.
+    fn passive_energy(&mut self, _t: f64, _q: &[f64], _v: &[f64]) -> Option<[f64; 3]> {
+        None
+    }
 }
 
 /// How far the fast preset's single linearised solve may go before its

@@ -193,6 +193,8 @@ pub struct Chain {
     /// their law's Gauss–Newton part (positive semi-definite: the static
     /// solve minimises the energy).
     pub(crate) law_gauss_newton: bool,
+    /// Zero accelerations for [`Chain::passive_energy_at`]'s kinematics.
+    energy_zeros: Vec<f64>,
 }
 
 impl std::fmt::Debug for Chain {
@@ -246,6 +248,7 @@ impl Chain {
             without_geometric: false,
             fell_back: false,
             law_gauss_newton: false,
+            energy_zeros: Vec::new(),
         }
     }
 
@@ -839,6 +842,40 @@ impl Chain {
     /// evaluation (zero at the world origin), J.
     pub fn gravity_energy(&self) -> f64 {
         self.joints.iter().zip(&self.poses).filter_map(|(j, ps)| j.link.map(|lm| -lm.mass * self.gravity.dot(ps.pos + ps.rot * lm.com + self.origin))).sum()
+    }
+
+    /// Whether nothing outside the chain does work on it: its base and
+    /// every anchor target at rest, no loads, drives, force elements or
+    /// pair elements, no limbs (a tree's limbs may end on moving bodies)
+    /// and no wrenches set by a forest. Its springs (and gravity) are then
+    /// conservative and its dampers dissipative: its energy cannot grow.
+    pub fn is_passive(&self) -> bool {
+        let at_rest = |b: &BaseMotion| matches!(b, BaseMotion::Fixed(_));
+        at_rest(&self.base)
+            && self.anchors.iter().all(|a| at_rest(&a.target))
+            && self.loads.is_empty()
+            && self.forces.is_empty()
+            && self.pairs.is_empty()
+            && self.external.is_empty()
+            && self.limbs.is_empty()
+            && self.joint_forces.iter().all(|f| *f == 0.0)
+    }
+
+    /// For a passive chain ([`Chain::is_passive`]): its energy at
+    /// `(t, q, v)` as `[kinetic, gravitational, elastic]`, J (one
+    /// kinematics pass at zero acceleration: the last residual's poses and
+    /// loads are overwritten). `None` for a chain that is not passive.
+    pub(crate) fn passive_energy_at(&mut self, t: f64, q: &[f64], v: &[f64]) -> Option<[f64; 3]> {
+        if !self.is_passive() || q.len() != self.joints.len() || v.len() != q.len() {
+            return None;
+        }
+        let zeros = std::mem::take(&mut self.energy_zeros);
+        let zeros = if zeros.len() == q.len() { zeros } else { vec![0.0; q.len()] };
+        let done = self.kinematics(t, q, v, &zeros);
+        self.energy_zeros = zeros;
+        done.ok()?;
+        let parts = [self.kinetic_energy(), self.gravity_energy(), self.elastic_energy(q) + self.force_element_energy(t)];
+        parts.iter().all(|e| e.is_finite()).then_some(parts)
     }
 
     /// Elastic energy of the joint springs at `q`, J.

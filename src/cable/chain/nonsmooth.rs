@@ -47,6 +47,9 @@ impl SecondOrderSystem for Chain {
     fn tangent_fell_back(&self) -> bool {
         self.fell_back()
     }
+    fn passive_energy(&mut self, t: f64, q: &[f64], v: &[f64]) -> Option<[f64; 3]> {
+        self.passive_energy_at(t, q, v)
+    }
     fn position_tolerance(&self) -> f64 {
         self.position_tolerance
     }

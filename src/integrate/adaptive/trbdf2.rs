@@ -204,7 +204,7 @@ impl TrBdf2 {
         stats.add_work(&work);
         match result {
             Ok(()) => Ok(None),
-            Err(Failure::NotConverged { .. } | Failure::Linearisation) => {
+            Err(Failure::NotConverged { .. } | Failure::Linearisation | Failure::EnergyGain) => {
                 stats.newton_failures += 1;
                 Ok(Some(Attempt::Rejected(0.25 * h)))
             }
