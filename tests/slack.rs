@@ -403,17 +403,19 @@ fn slack_rope_laid_across_gravity_swings_down_and_settles_to_the_catenary() {
 /// The V of `slack_paths` laid in the vertical plane and across gravity
 /// (its vertex at (5, 0, 3.32) m: a newcomer's rope between two posts with
 /// a corner in the level plane), 20 mm steel rope, N = 48, stiffness
-/// damping τ = 0.01 s and nothing else, let go at 1/60 s with the
-/// energy-checked sub-steps on (`NewtonSettings::energy_check`, an opt-in).
+/// damping τ = 0.01 s and nothing else, let go at 1/60 s with the default
+/// integrator (energy-checked sub-steps, `NewtonSettings::energy_check`).
 /// The rope is passive (pins at rest, no loads): its energy must not grow.
-/// Measured, the largest rise from one frame to the next is 3.2e-5 (vertical)
-/// and 1.5e-4 (level) of the swing's scale (the rope's weight times the
-/// catenary's sag, 551 J); the bound is 2e-4. Without the check (the
-/// default) the vertical V gains up to 175 J in one frame (its total going
-/// from 253 J to 453 J at 2.1 s) and the level V stops at its first step
-/// ("Newton did not converge" at every split). With 1 /s of drag added the
-/// level V settles to the elastic catenary (sag within 1 %, back in the
-/// vertical plane).
+/// The check allows each sub-step a gain of 1 % of the energy exchanged
+/// or of the kinetic + elastic energy (`ENERGY_RISE`, `ENERGY_ACTIVE`);
+/// the bound here is 2e-3 of the swing's scale (the rope's weight times
+/// the catenary's sag, 551 J) from one frame to the next (measured:
+/// `docs/verification.md`). Without the check the vertical V gained up to
+/// 175 J (0.32 of the scale) in one frame (its total going from 253 J to
+/// 453 J at 2.1 s) and the level V stopped at its first step ("Newton did
+/// not converge" at every split). With 1 /s of drag added the level V
+/// settles to the elastic catenary (sag within 1 %, back in the vertical
+/// plane).
 #[test]
 fn a_v_laid_in_or_across_gravitys_plane_whips_open_without_gaining_energy() {
     let n = 48;
@@ -433,9 +435,7 @@ fn a_v_laid_in_or_across_gravitys_plane_whips_open_without_gaining_energy() {
             .velocity_damping(drag, drag)
             .build()
             .unwrap();
-        let mut cable = Cable::new(model, Scheme::default()).unwrap();
-        cable.integrator.newton.energy_check = true;
-        cable
+        Cable::new(model, Scheme::default()).unwrap()
     };
     for (name, path) in [("vertical V", &vertical), ("level V", &level)] {
         let mut cable = build(path, 0.0);
@@ -456,7 +456,7 @@ fn a_v_laid_in_or_across_gravitys_plane_whips_open_without_gaining_energy() {
             s.energy_refusals,
             s.definite_retries
         );
-        assert!(worst < 2e-4 * scale, "{name}: the energy rose by {worst} J in one frame");
+        assert!(worst < 2e-3 * scale, "{name}: the energy rose by {worst} J in one frame");
     }
     let mut cable = build(&level, 1.0);
     while cable.time() < 12.0 - 1e-9 {
