@@ -39,7 +39,7 @@ pub(crate) use self::dense::gauss_solve;
 pub use self::dense::{DenseSystem, DenseSystemError, ForceFn};
 pub use self::error::IntegrateError;
 pub use self::explicit::{substeps_needed, GROWTH, SAFETY};
-pub use self::integrator::{Integrator, StepStats, Substeps, CALM_ITERATIONS, CALM_STEPS, ENERGY_ACTIVE, ENERGY_RISE};
+pub use self::integrator::{Integrator, StepStats, Substeps, CALM_ITERATIONS, CALM_STEPS, ENERGY_ACTIVE};
 pub use self::newton::{NewtonSettings, CHORD_LIMIT, KINK_BAND, LAST_RESORT_BRANCH_UPDATES, MAX_BRANCH_UPDATES, PATIENT_BUDGET};
 pub use self::pendulum::Pendulum;
 pub use self::scheme::{stability_limit, AlphaParameters, Scheme, SchemeError, SchemeParams};

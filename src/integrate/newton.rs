@@ -56,8 +56,8 @@ pub struct NewtonSettings {
     /// Energy-checked sub-steps (default `true`): a sub-step of a passive
     /// system
     /// ([`SecondOrderSystem::passive_energy`](super::SecondOrderSystem::passive_energy))
-    /// that gains more energy than [`ENERGY_RISE`](super::ENERGY_RISE) and
-    /// [`ENERGY_ACTIVE`](super::ENERGY_ACTIVE) allow is refused and the
+    /// after which its step's energy has grown by more than
+    /// [`ENERGY_ACTIVE`](super::ENERGY_ACTIVE) allows is refused and the
     /// step split further, and a failed Newton solve of such a system is
     /// retried with the tangent's fallback at every split (not only from a
     /// calm state). It lets a rope laid with a corner across gravity run,
@@ -102,7 +102,7 @@ pub(crate) enum Failure {
     /// the default scheme.
     Linearisation,
     /// A passive system gained more energy over a sub-step than
-    /// [`ENERGY_RISE`](super::ENERGY_RISE) of its scale: the step is split.
+    /// [`ENERGY_ACTIVE`](super::ENERGY_ACTIVE) allows: the step is split.
     EnergyGain,
 }
 

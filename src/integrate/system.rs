@@ -213,9 +213,10 @@ pub trait SecondOrderSystem {
     /// its three parts `[kinetic, gravitational, elastic]` (J): one that
     /// nothing outside does work on (supports at rest, no loads or drives;
     /// gravity and springs conservative, dampers dissipative), so that its
-    /// energy cannot grow. The integrator then refuses a sub-step whose
-    /// energy grows by more than [`ENERGY_RISE`](super::ENERGY_RISE) of the
-    /// energy its parts exchanged over it, and splits the step: on a
+    /// energy cannot grow. The integrator then refuses a sub-step after
+    /// which the step's energy has grown by more than
+    /// [`ENERGY_ACTIVE`](super::ENERGY_ACTIVE) allows, and splits the
+    /// step: on a
     /// whipping slack rope the discrete step can gain energy where the
     /// motion is not resolved. `None` (the default): not passive, or not
     /// known; nothing is checked.
