@@ -461,11 +461,17 @@ impl Integrator {
                     // tangent is indefinite (a whipping slack rope) they
                     // can lead to a solution that gains energy.
                     let calm_retry = n == start_n && stats.definite_retries == 0 && sys.calm(&state.q, &state.v);
-                    let passive = self.newton.energy_check && !calm_retry && sys.passive_energy(state.t, &state.q, &state.v).is_some();
+                    let passive = self.newton.energy_check
+                        && stability_limit(&self.scheme).is_none()
+                        && !calm_retry
+                        && sys.passive_energy(state.t, &state.q, &state.v).is_some();
                     if matches!(failure, Failure::NotConverged { .. }) && (calm_retry || passive) {
                         stats.definite_retries += 1;
                         sys.set_definite_tangent(true);
-                        let retried = self.try_substeps(sys, state, h, n, check, stats);
+                        // A passive system's fallback is checked at the
+                        // finest split too: only a solution whose energy the
+                        // check accepts replaces the exact Newton's failure.
+                        let retried = self.try_substeps(sys, state, h, n, check || passive, stats);
                         sys.set_definite_tangent(false);
                         if retried.is_ok() && (passive || sys.calm(&state.q, &state.v)) {
                             stats.substeps_used += u64::from(n);
