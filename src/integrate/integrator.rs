@@ -460,12 +460,16 @@ impl Integrator {
                     // corrections are not Newton steps, and where the exact
                     // tangent is indefinite (a whipping slack rope) they
                     // can lead to a solution that gains energy.
-                    let calm_retry = n == start_n && stats.definite_retries == 0 && sys.calm(&state.q, &state.v);
-                    let passive = self.newton.energy_check
-                        && stability_limit(&self.scheme).is_none()
+                    let not_converged = matches!(failure, Failure::NotConverged { .. });
+                    let calm_retry = not_converged && n == start_n && stats.definite_retries == 0 && sys.calm(&state.q, &state.v);
+                    // (Its energy, a kinematics pass, only asked after a
+                    // Newton failure that a retry could mend.)
+                    let passive = not_converged
                         && !calm_retry
+                        && self.newton.energy_check
+                        && stability_limit(&self.scheme).is_none()
                         && sys.passive_energy(state.t, &state.q, &state.v).is_some();
-                    if matches!(failure, Failure::NotConverged { .. }) && (calm_retry || passive) {
+                    if calm_retry || passive {
                         stats.definite_retries += 1;
                         sys.set_definite_tangent(true);
                         // A passive system's fallback is checked at the
@@ -488,7 +492,6 @@ impl Integrator {
                     // Every split failed to converge: the last-resort pass,
                     // once, from the first split with a larger
                     // branch-update budget.
-                    let not_converged = matches!(failure, Failure::NotConverged { .. });
                     if exhausted && not_converged && self.ws.branch_budget == MAX_BRANCH_UPDATES {
                         self.ws.branch_budget = LAST_RESORT_BRANCH_UPDATES;
                         n = start_n;
