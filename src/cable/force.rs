@@ -81,6 +81,16 @@ pub trait ForceElement: Send + Sync {
     fn contact_force(&self, _t: f64, _at: &PointState) -> Option<f64> {
         None
     }
+
+    /// Whether the element does no work on the chain but through its
+    /// potential ([`ForceElement::energy`]) and dissipation: a spring to
+    /// a fixed point, a contact with a fixed obstacle. A chain whose
+    /// elements are all passive may be energy-checked by the integrator
+    /// ([`Chain::is_passive`](super::chain::Chain::is_passive)). Default
+    /// `false` (a load that does work, a moving target).
+    fn is_passive(&self) -> bool {
+        false
+    }
 }
 
 /// A force element on a link of a chain.
@@ -121,6 +131,10 @@ impl ForceElement for PointSpring {
 
     fn energy(&self, _t: f64, at: &PointState) -> f64 {
         0.5 * self.stiffness * at.point.distance_squared(self.target)
+    }
+
+    fn is_passive(&self) -> bool {
+        true
     }
 }
 
@@ -199,6 +213,14 @@ pub trait PairElement: Send + Sync {
     fn contact_force(&self, _t: f64, _a: &PointState, _b: &PointState) -> Option<f64> {
         None
     }
+
+    /// Whether the element does no work on the chain but through its
+    /// potential ([`PairElement::energy`]) and dissipation (a spring or a
+    /// contact between two points of the chain), as
+    /// [`ForceElement::is_passive`]. Default `false`.
+    fn is_passive(&self) -> bool {
+        false
+    }
 }
 
 /// A [`PairElement`] between two links of a chain.
@@ -246,5 +268,9 @@ impl PairElement for PairSpring {
 
     fn energy(&self, _t: f64, a: &PointState, b: &PointState) -> f64 {
         0.5 * self.stiffness * a.point.distance_squared(b.point)
+    }
+
+    fn is_passive(&self) -> bool {
+        true
     }
 }

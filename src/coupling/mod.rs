@@ -1998,13 +1998,14 @@ fn island_passes(
         }
         // Their friction, from the same touches at the end of the last pass
         // (kept by the members).
-        let elements: Vec<crate::cable::PairContact> = found
+        let elements: Vec<(crate::cable::PairContact, f64)> = found
             .iter()
             .map(|p| {
                 let (a, b) =
                     (point_of(cables, &listed, &chains, p.cable_a, p.link_a, p.point_a), point_of(cables, &listed, &chains, p.cable_b, p.link_b, p.point_b));
                 let recalled = contact::FrictionMemory::recall(listed.iter().map(|&i| &cables[i].friction.cross_pairs[..]), (a.point + b.point) * 0.5);
-                contact::pair_friction(p.element, p.mu, &a, &b, recalled)
+                let (element, offset) = contact::pair_overlap(p.element, &a, &b, recalled);
+                (contact::pair_friction(element, p.mu, &a, &b, recalled), offset)
             })
             .collect();
         let pairs: Vec<ForestPair> = found
@@ -2017,7 +2018,7 @@ fn island_passes(
                 chain_b: p.cable_b,
                 link_b: p.link_b,
                 point_b: p.point_b,
-                element: Arc::new(*element),
+                element: Arc::new(element.0),
             })
             .collect();
         let hs = hp / n as f64;
@@ -2041,7 +2042,7 @@ fn island_passes(
             let (a, b) =
                 (point_of(cables, &listed, &chains, p.chain_a, p.link_a, p.point_a), point_of(cables, &listed, &chains, p.chain_b, p.link_b, p.point_b));
             if let Some(&owner) = listed.get(p.chain_a) {
-                cables[owner].friction.remember_cross(element, &a, &b, hp);
+                cables[owner].friction.remember_cross(&element.0, &a, &b, hp, element.1);
             }
         }
         if k + 1 < count {

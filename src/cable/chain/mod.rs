@@ -845,19 +845,20 @@ impl Chain {
     }
 
     /// Whether nothing outside the chain does work on it: its base and
-    /// every anchor target at rest, no loads, drives, force elements or
-    /// pair elements, no limbs (a tree's limbs may end on moving bodies)
-    /// and no wrenches set by a forest. Its springs (and gravity) are then
-    /// conservative and its dampers dissipative: its energy cannot grow.
+    /// every anchor target (of every limb) at rest, no loads or drives, only
+    /// passive force and pair elements ([`ForceElement::is_passive`]: springs
+    /// to fixed points, contacts with fixed obstacles and between two of its
+    /// points) and no wrenches set by a forest. Its springs, contacts (and
+    /// gravity) are then conservative and its dampers and friction
+    /// dissipative: its energy cannot grow.
     pub fn is_passive(&self) -> bool {
         let at_rest = |b: &BaseMotion| matches!(b, BaseMotion::Fixed(_));
         at_rest(&self.base)
             && self.anchors.iter().all(|a| at_rest(&a.target))
             && self.loads.is_empty()
-            && self.forces.is_empty()
-            && self.pairs.is_empty()
+            && self.forces.iter().all(|f| f.element.is_passive())
+            && self.pairs.iter().all(|p| p.element.is_passive())
             && self.external.is_empty()
-            && self.limbs.is_empty()
             && self.joint_forces.iter().all(|f| *f == 0.0)
     }
 
