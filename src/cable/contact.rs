@@ -531,6 +531,7 @@ impl PairElement for PairContact {
         let (depth, rate) = self.depth(a, b);
         Some(self.law.force(depth, rate).0)
     }
+
     /// A contact between two points of the chain: its normal law's
     /// potential, its damping and friction dissipate (within a step, with
     /// its normal and friction anchor frozen).
@@ -591,6 +592,7 @@ impl ForceElement for SphereContact {
     fn contact_force(&self, t: f64, at: &PointState) -> Option<f64> {
         Some(self.normal_force(t, at))
     }
+
     // Not yet counted passive (the default `false`), although against a
     // fixed obstacle it is: with it, the energy check refused sub-steps
     // of a rope landing on a 16° slope with friction (μ = 0.3) until it
