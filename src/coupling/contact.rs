@@ -172,13 +172,24 @@ impl PairTouch {
     }
 }
 
+/// A pair contact found at a pass's start between points now at `a` and
+/// `b`, as the step solves it, with what `recalled` (the same touch at the
+/// end of the last pass, [`FrictionMemory::recall`]) kept of it: its
+/// overlap that is not elastic ([`pair_overlap`]) and its friction
+/// ([`pair_friction`], coefficient `mu`). Returns the contact and that
+/// overlap's offset (m), to remember after the pass.
+pub(crate) fn recalled_pair(contact: PairContact, mu: f64, a: &PointState, b: &PointState, recalled: Option<PairTouch>) -> (PairContact, f64) {
+    let (contact, offset) = pair_overlap(contact, a, b, recalled);
+    (pair_friction(contact, mu, a, b, recalled), offset)
+}
+
 /// `contact` between points now at `a` and `b`, with Coulomb friction
 /// `mu` (frictionless if 0) whose stick state is `recalled`'s (the same
 /// touch at the end of the last step, [`FrictionMemory::recall`]): its
 /// stretch carried over and its normal force as the limit's bound; a new
 /// touch starts relaxed with no friction in its first step (as a
 /// [`SphereContact`]'s).
-pub(crate) fn pair_friction(contact: PairContact, mu: f64, a: &PointState, b: &PointState, recalled: Option<PairTouch>) -> PairContact {
+fn pair_friction(contact: PairContact, mu: f64, a: &PointState, b: &PointState, recalled: Option<PairTouch>) -> PairContact {
     if mu <= 0.0 {
         return contact;
     }
@@ -202,7 +213,7 @@ pub(crate) fn pair_friction(contact: PairContact, mu: f64, a: &PointState, b: &P
 /// of Hertz energy: an undamped two-leg sling whose slack legs whipped
 /// into each other gained 27 kJ in one frame and threw its 500 kg crate
 /// 8 m up (2026-11-28).
-pub(crate) fn pair_overlap(contact: PairContact, a: &PointState, b: &PointState, recalled: Option<PairTouch>) -> (PairContact, f64) {
+fn pair_overlap(contact: PairContact, a: &PointState, b: &PointState, recalled: Option<PairTouch>) -> (PairContact, f64) {
     let depth = contact.depth(a, b).0;
     let offset = match recalled {
         Some(t) => t.offset,
@@ -1487,8 +1498,7 @@ pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, memor
         .map(|p| {
             let (a, b) = (chain_point(chain, p.link_a, p.point_a), chain_point(chain, p.link_b, p.point_b));
             let recalled = FrictionMemory::recall([&memory.own_pairs[..]], (a.point + b.point) * 0.5);
-            let (element, offset) = pair_overlap(p.element, &a, &b, recalled);
-            let element = pair_friction(element, p.mu, &a, &b, recalled);
+            let (element, offset) = recalled_pair(p.element, p.mu, &a, &b, recalled);
             memory.pair_step.push((element, offset));
             AttachedPair { link_a: p.link_a, point_a: p.point_a, link_b: p.link_b, point_b: p.point_b, element: Arc::new(element) }
         })

@@ -2004,8 +2004,7 @@ fn island_passes(
                 let (a, b) =
                     (point_of(cables, &listed, &chains, p.cable_a, p.link_a, p.point_a), point_of(cables, &listed, &chains, p.cable_b, p.link_b, p.point_b));
                 let recalled = contact::FrictionMemory::recall(listed.iter().map(|&i| &cables[i].friction.cross_pairs[..]), (a.point + b.point) * 0.5);
-                let (element, offset) = contact::pair_overlap(p.element, &a, &b, recalled);
-                (contact::pair_friction(element, p.mu, &a, &b, recalled), offset)
+                contact::recalled_pair(p.element, p.mu, &a, &b, recalled)
             })
             .collect();
         let pairs: Vec<ForestPair> = found

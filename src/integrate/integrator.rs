@@ -420,12 +420,13 @@ impl Integrator {
         // full step every frame would cost a failed solve each time).
         let mut n = if auto { self.split.clamp(n0, max_n) } else { n0 };
         let start_n = n;
+        // Energy checks: not for conditionally stable schemes (they keep
+        // their textbook behaviour, divergence included).
+        let checking = self.newton.energy_check && stability_limit(&self.scheme).is_none();
         loop {
             let before = stats.newton_iterations;
-            // Energy checks: not at the finest split (taken as solved), and
-            // not for conditionally stable schemes (they keep their
-            // textbook behaviour, divergence included).
-            let check = self.newton.energy_check && n.saturating_mul(2) <= max_n && stability_limit(&self.scheme).is_none();
+            // (Not at the finest split, taken as solved.)
+            let check = checking && n.saturating_mul(2) <= max_n;
             match self.try_substeps(sys, state, h, n, check, stats) {
                 Ok(()) => {
                     stats.substeps_used += u64::from(n);
@@ -464,11 +465,7 @@ impl Integrator {
                     let calm_retry = not_converged && n == start_n && stats.definite_retries == 0 && sys.calm(&state.q, &state.v);
                     // (Its energy, a kinematics pass, only asked after a
                     // Newton failure that a retry could mend.)
-                    let passive = not_converged
-                        && !calm_retry
-                        && self.newton.energy_check
-                        && stability_limit(&self.scheme).is_none()
-                        && sys.passive_energy(state.t, &state.q, &state.v).is_some();
+                    let passive = not_converged && !calm_retry && checking && sys.passive_energy(state.t, &state.q, &state.v).is_some();
                     if calm_retry || passive {
                         stats.definite_retries += 1;
                         sys.set_definite_tangent(true);
