@@ -149,8 +149,14 @@ fn damper_decays_the_swing_and_a_stiff_spring_is_stable_at_the_frame_step() {
 /// * The scheme (generalized-α, ρ∞ = 0) only takes energy out: the total
 ///   energy falls at every step, and the payload stays within the
 ///   spring's reach.
-/// * Started 10 cm off (1 030 times the weight), it fails loudly, with the
-///   state and the time unchanged.
+/// * Started 10 cm off (1 030 times the weight), it runs its 3 s too, at
+///   the finest split (256 sub-steps per frame step, 1 600 Newton
+///   iterations): the sub-steps whose solve fails there are cut into up to
+///   64 pieces (`NewtonSettings::rescue_pieces`; it failed at the first
+///   step before). The finest split's sub-steps are not energy-checked and
+///   a step may gain up to 2.8e4 J (6 % of the spring's energy), but the
+///   total never rises above its start and the payload stays within the
+///   10 cm it started from.
 #[test]
 fn a_spring_pulling_100_times_the_weight_runs_at_the_frame_step() {
     let k = 28.0 * M * 3600.0;
@@ -177,9 +183,25 @@ fn a_spring_pulling_100_times_the_weight_runs_at_the_frame_step() {
     assert!(largest <= 0.0101, "largest |x| {largest}");
 
     let mut far = start(0.1);
-    let before = (far.time(), far.state.q.clone());
-    let err = far.step(1.0 / 60.0).unwrap_err().to_string();
-    println!("10 cm: {err}");
-    assert!(err.contains("did not converge"), "{err}");
-    assert_eq!((far.time(), far.state.q.clone()), before);
+    let e_start = far.energy();
+    let (mut e, mut rise, mut largest, mut steps, mut most_substeps, mut highest) = (e_start, f64::NEG_INFINITY, 0.0f64, 0, 0, f64::NEG_INFINITY);
+    while far.time() < 3.0 - 1e-9 {
+        let stats = far.step(1.0 / 60.0).unwrap_or_else(|e| panic!("10 cm: {e}"));
+        most_substeps = most_substeps.max(stats.substeps_used);
+        rise = rise.max(far.energy() - e);
+        e = far.energy();
+        highest = highest.max(e);
+        largest = largest.max(far.model.body_state(&body).0.x.abs());
+        steps += 1;
+    }
+    let s = far.total_stats;
+    println!(
+        "10 cm: {:.1} Newton iterations and {:.1} sub-steps per step (at most {most_substeps}), {} rescued sub-steps; largest energy change over a step {rise:+.3e} J (spring energy {:.0} J, total {e_start:.0} → {e:.0} J, at most {highest:.0} J); largest |x| {largest:.4} m",
+        s.newton_iterations as f64 / steps as f64,
+        s.substeps_used as f64 / steps as f64,
+        s.rescued_substeps,
+        0.5 * k * 1e-2
+    );
+    assert!(highest <= e_start, "10 cm: the total rose to {highest} J from {e_start} J");
+    assert!(largest <= 0.1, "10 cm: largest |x| {largest}");
 }

@@ -874,8 +874,9 @@ fn newton_fallback_splits_steps_and_reports_failure() {
     assert!(matches!(err, IntegrateError::NotConverged { substeps: 256, .. } | IntegrateError::NonFinite { .. }), "{err:?}");
     assert!(err.to_string().contains(&format!("t = {}", before.t)));
     assert_eq!(state, before);
-    // Without fallback the first case fails.
-    let mut strict = Integrator::default().with_newton(NewtonSettings { max_substeps: 1, ..plain });
+    // Without fallback (no split, no cut of the finest split's sub-step)
+    // the first case fails.
+    let mut strict = Integrator::default().with_newton(NewtonSettings { max_substeps: 1, rescue_pieces: 1, ..plain });
     let mut state = State::new(&mut sys, 0.0, vec![1.0], vec![0.0]).expect("state");
     assert!(matches!(strict.step(&mut sys, &mut state, 0.38), Err(IntegrateError::NotConverged { .. })));
 }

@@ -2,7 +2,7 @@
 //! leaves the cable where it was (issue 10, items 4 and 6; partial).
 
 use bevy_rapier_cable::cable::*;
-use bevy_rapier_cable::integrate::Scheme;
+use bevy_rapier_cable::integrate::{NewtonSettings, Scheme};
 use glam::{DMat3, DVec3};
 
 const G: f64 = 9.81;
@@ -702,4 +702,34 @@ fn a_fold_laid_flat_is_refused_by_name() {
     for _ in 0..6 {
         open.step(1.0 / 60.0).expect("the fold open by 5 mm steps");
     }
+}
+
+/// A Newton failure on an undamped rope that was slack carries the advice
+/// (`CableError::UndampedSlack`, docs/architecture.md "Slack … Known
+/// failures"): it names the damping that usually lets such a run go on.
+/// The undamped scenes that failed so are now run by the integrator's
+/// fallbacks (the finest split's sub-steps cut further,
+/// `NewtonSettings::rescue_pieces`); the failure is forced here with a
+/// Newton of one iteration and no split, on the 1 t payload falling 10 m
+/// on its slack 20 m rope and snapping it taut. The state and time stay
+/// at the failing step's start.
+#[test]
+fn a_failure_on_an_undamped_slack_rope_says_to_damp_it() {
+    let mut cable = payload_on_straight_rope(10.0, true);
+    cable.integrator.newton = NewtonSettings { max_iterations: 1, max_substeps: 1, rescue_pieces: 1, ..NewtonSettings::default() };
+    let (t, err) = loop {
+        let (t, q) = (cable.time(), cable.state.q.clone());
+        match cable.step(1.0 / 60.0) {
+            Ok(_) if cable.time() < 3.0 => {}
+            Ok(_) => panic!("the forced failure did not come in 3 s"),
+            Err(e) => {
+                assert_eq!((cable.time(), &cable.state.q), (t, &q));
+                break (t, e);
+            }
+        }
+    };
+    println!("stopped at {t:.3} s: {err}");
+    assert!(matches!(err, CableError::UndampedSlack { .. }), "{err:?}");
+    let message = err.to_string();
+    assert!(message.contains("no damping") && message.contains("0.01 s"), "{message}");
 }

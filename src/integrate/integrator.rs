@@ -9,7 +9,7 @@ use super::newmark_family::{step_alpha, step_linearly_implicit};
 use super::newton::{Failure, NewtonSettings, LAST_RESORT_BRANCH_UPDATES, MAX_BRANCH_UPDATES};
 use super::scheme::{stability_limit, Scheme};
 use super::state::State;
-use super::system::SecondOrderSystem;
+use super::system::{EnergyBalance, SecondOrderSystem, SystemError};
 use super::wilson::step_wilson;
 
 /// How a step is split into sub-steps.
@@ -72,9 +72,13 @@ pub struct StepStats {
     pub newton_fallbacks: usize,
     /// Sub-steps refused because a passive system's energy grew over its
     /// step by more than [`ENERGY_ACTIVE`] allows
-    /// ([`SecondOrderSystem::passive_energy`]); each refusal splits the
+    /// ([`SecondOrderSystem::energy_balance`]); each refusal splits the
     /// step further.
     pub energy_refusals: usize,
+    /// Sub-steps at the finest split whose Newton solve failed and that
+    /// were taken in pieces instead
+    /// ([`NewtonSettings::rescue_pieces`]).
+    pub rescued_substeps: usize,
 }
 
 impl AddAssign for StepStats {
@@ -88,6 +92,7 @@ impl AddAssign for StepStats {
         self.branch_updates += o.branch_updates;
         self.definite_retries += o.definite_retries;
         self.newton_fallbacks += o.newton_fallbacks;
+        self.rescued_substeps += o.rescued_substeps;
         self.energy_refusals += o.energy_refusals;
     }
 }
@@ -211,19 +216,25 @@ pub struct Integrator {
     ws: Workspace,
 }
 
-/// The energy check of a passive system's step
-/// ([`SecondOrderSystem::passive_energy`],
+/// The energy check of a step of a system with an energy account
+/// ([`SecondOrderSystem::energy_balance`]: a passive system, or one whose
+/// only outside work is its supports' prescribed motion,
 /// [`NewtonSettings::energy_check`](super::NewtonSettings::energy_check)):
-/// the step's energy may grow, over its checked sub-steps together, by at
-/// most this fraction of the kinetic + elastic energy at the first of
+/// the step's energy may grow, over its checked sub-steps together, by the
+/// supports' work (trapezoidal rule on their power per sub-step) and at
+/// most this fraction more of the kinetic + elastic energy at the first of
 /// them (plus 1e-9 of the energy's size: round-off and the Newton
 /// tolerance). A sub-step past that is refused and the step split further,
 /// up to [`NewtonSettings::max_substeps`](super::NewtonSettings::max_substeps);
-/// at the finest split the sub-step is taken as solved. Checked: every
+/// at the finest split the sub-step is taken as solved (one whose Newton
+/// solve fails there is cut further,
+/// [`NewtonSettings::rescue_pieces`](super::NewtonSettings::rescue_pieces),
+/// and that cut checked on its own). Checked: every
 /// sub-step of a split step, and a whole step from a state that is not calm
 /// ([`SecondOrderSystem::calm`]: a slack element); a step taken whole from
 /// a calm state is not (the check costs a kinematics pass, about half a
-/// Newton iteration). Not for conditionally stable schemes (they keep
+/// Newton iteration, or a residual pass when the supports move). Not for
+/// conditionally stable schemes (they keep
 /// their textbook behaviour). Measured (docs/architecture.md,
 /// "Energy-checked sub-steps"): a V of steel rope let go between two pins
 /// gains at most 0.33 J in a frame (175 J unchecked), and a 1 t block's
@@ -356,6 +367,13 @@ impl Integrator {
         self.end_evaluated
     }
 
+    /// Whether steps are energy-checked: the setting, and not for
+    /// conditionally stable schemes (they keep their textbook behaviour,
+    /// divergence included).
+    fn checks_energy(&self) -> bool {
+        self.newton.energy_check && stability_limit(&self.scheme).is_none()
+    }
+
     fn step_explicit<S: SecondOrderSystem + ?Sized>(&mut self, sys: &mut S, state: &mut State, h: f64, stats: &mut StepStats) -> Result<(), IntegrateError> {
         let (t, scheme) = (state.t, self.scheme.name());
         let n = match self.substeps {
@@ -420,14 +438,15 @@ impl Integrator {
         // full step every frame would cost a failed solve each time).
         let mut n = if auto { self.split.clamp(n0, max_n) } else { n0 };
         let start_n = n;
-        // Energy checks: not for conditionally stable schemes (they keep
-        // their textbook behaviour, divergence included).
-        let checking = self.newton.energy_check && stability_limit(&self.scheme).is_none();
+        let checking = self.checks_energy();
         loop {
             let before = stats.newton_iterations;
-            // (Not at the finest split, taken as solved.)
-            let check = checking && n.saturating_mul(2) <= max_n;
-            match self.try_substeps(sys, state, h, n, check, stats) {
+            // At the finest split a sub-step is taken as solved (not
+            // energy-checked), and one whose Newton solve fails is cut
+            // further ([`rescue_substep`]).
+            let rescue = n.saturating_mul(2) > max_n;
+            let check = checking && !rescue;
+            match self.try_substeps(sys, state, h, n, check, rescue, stats) {
                 Ok(()) => {
                     stats.substeps_used += u64::from(n);
                     if auto {
@@ -456,25 +475,24 @@ impl Integrator {
                     // the same split with the tangent's fallback for
                     // indefinite iterates (a stiff end spring whose target
                     // jumped), before splitting; kept only if it ends calm.
-                    // So is a step of a passive system at every split, its
-                    // energy checked as any other attempt's: the fallback's
+                    // So is a step of a system with an energy account
+                    // (passive, or its supports' work counted) at every
+                    // split, its energy checked as any other attempt's: the fallback's
                     // corrections are not Newton steps, and where the exact
                     // tangent is indefinite (a whipping slack rope) they
                     // can lead to a solution that gains energy.
                     let not_converged = matches!(failure, Failure::NotConverged { .. });
                     let calm_retry = not_converged && n == start_n && stats.definite_retries == 0 && sys.calm(&state.q, &state.v);
-                    // (Its energy, a kinematics pass, only asked after a
-                    // Newton failure that a retry could mend.)
-                    let passive = not_converged && !calm_retry && checking && sys.passive_energy(state.t, &state.q, &state.v).is_some();
-                    if calm_retry || passive {
+                    let accounted = not_converged && !calm_retry && checking && sys.accounts_energy();
+                    if calm_retry || accounted {
                         stats.definite_retries += 1;
                         sys.set_definite_tangent(true);
-                        // A passive system's fallback is checked at the
+                        // An accounted system's fallback is checked at the
                         // finest split too: only a solution whose energy the
                         // check accepts replaces the exact Newton's failure.
-                        let retried = self.try_substeps(sys, state, h, n, check || passive, stats);
+                        let retried = self.try_substeps(sys, state, h, n, check || accounted, false, stats);
                         sys.set_definite_tangent(false);
-                        if retried.is_ok() && (passive || sys.calm(&state.q, &state.v)) {
+                        if retried.is_ok() && (accounted || sys.calm(&state.q, &state.v)) {
                             stats.substeps_used += u64::from(n);
                             if auto {
                                 self.calm = 0;
@@ -511,6 +529,9 @@ impl Integrator {
     /// of a passive system, of a split step or from a state that is not
     /// calm, after which the attempt's energy has grown by more than
     /// [`ENERGY_ACTIVE`] allows fails the attempt ([`Failure::EnergyGain`]).
+    /// With `rescue` (the finest split), a generalized-α sub-step whose
+    /// Newton solve fails is cut further ([`rescue_substep`]).
+    #[allow(clippy::too_many_arguments)]
     fn try_substeps<S: SecondOrderSystem + ?Sized>(
         &mut self,
         sys: &mut S,
@@ -518,13 +539,15 @@ impl Integrator {
         h: f64,
         n: u32,
         check_energy: bool,
+        rescue: bool,
         stats: &mut StepStats,
     ) -> Result<(), Failure> {
+        let checking = self.checks_energy();
         let (t, hs) = (state.t, h / f64::from(n));
         let ws = &mut self.ws;
         let newton = &self.newton;
         // The energy at the start of the next sub-step, when known.
-        let mut known: Option<[f64; 3]> = None;
+        let mut known: Option<EnergyBalance> = None;
         // The attempt's net gain so far over its checked sub-steps, and its
         // budget (ENERGY_ACTIVE of the first checked sub-step's kinetic +
         // elastic energy), J: a share of the energy in motion and in the
@@ -534,7 +557,7 @@ impl Integrator {
         for k in 0..n {
             state.t = t + h * f64::from(k) / f64::from(n);
             let before = if check_energy && (n > 1 || !sys.calm(&state.q, &state.v)) {
-                known.take().or_else(|| sys.passive_energy(state.t, &state.q, &state.v))
+                known.take().or_else(|| sys.energy_balance(state.t, &state.q, &state.v, &state.a))
             } else {
                 None
             };
@@ -548,7 +571,18 @@ impl Integrator {
                 ref s => {
                     let p = if self.as_default { Scheme::default().alpha_parameters() } else { s.alpha_parameters() };
                     let p = p.expect("every other implicit scheme is generalized-α");
-                    step_alpha(sys, state, ws, p, hs, newton, stats)?;
+                    match step_alpha(sys, state, ws, p, hs, newton, stats) {
+                        // At the finest split, a sub-step whose solve did not
+                        // converge or met a singular effective matrix (an
+                        // iterate that left the tangent singular) is cut
+                        // further; a failed solve leaves the state as it was.
+                        Err(failed @ (Failure::NotConverged { .. } | Failure::Error(IntegrateError::System { source: SystemError::Singular { .. }, .. })))
+                            if rescue =>
+                        {
+                            rescue_substep(sys, state, ws, p, hs, newton, checking, stats).map_err(|_| failed)?;
+                        }
+                        other => other?,
+                    }
                     true
                 }
             };
@@ -556,13 +590,15 @@ impl Integrator {
                 return Err(Failure::Error(IntegrateError::NonFinite { t: state.t }));
             }
             if let Some(e0) = before {
-                // The energy's kinematics pass overwrote the last residual's.
+                // The energy's pass overwrote the last residual's.
                 self.end_evaluated = false;
-                if let Some(e1) = sys.passive_energy(state.t, &state.q, &state.v) {
-                    let gain: f64 = e1.iter().sum::<f64>() - e0.iter().sum::<f64>();
-                    let size: f64 = e0.iter().map(|e| e.abs()).sum();
+                if let Some(e1) = sys.energy_balance(state.t, &state.q, &state.v, &state.a) {
+                    // The gain beyond the supports' work (trapezoidal rule
+                    // on their power).
+                    let gain = e1.total() - e0.total() - 0.5 * hs * (e0.power + e1.power);
+                    let size: f64 = e0.parts.iter().map(|e| e.abs()).sum();
                     net += gain;
-                    let budget = *budget.get_or_insert(ENERGY_ACTIVE * (e0[0] + e0[2]));
+                    let budget = *budget.get_or_insert(ENERGY_ACTIVE * (e0.parts[0] + e0.parts[2]));
                     if net > budget + 1e-9 * size {
                         stats.energy_refusals += 1;
                         return Err(Failure::EnergyGain);
@@ -572,6 +608,77 @@ impl Integrator {
             }
         }
         Ok(())
+    }
+}
+
+/// Default [`NewtonSettings::rescue_pieces`]: the most pieces a sub-step
+/// of the finest split whose Newton solve fails is cut into (with the
+/// default 256 sub-steps, a 1/60 s step is then resolved down to 1 µs where
+/// it needs it).
+pub const RESCUE_PIECES: u32 = 64;
+
+/// A sub-step of `hs` (s) at the finest split whose generalized-α Newton
+/// solve did not converge or met a singular effective matrix, taken again
+/// from `state` (the sub-step's start, which the failed solve left as it
+/// was) in 2, 4, … [`NewtonSettings::rescue_pieces`] pieces with exact
+/// Newton solves. A local refinement of the finest split: only the
+/// sub-step that needs it is cut. The first cut whose pieces all converge
+/// is kept if, for a system with an energy account
+/// ([`SecondOrderSystem::energy_balance`]) and with `check_energy`, its
+/// energy grew beyond its supports' work by at most [`ENERGY_ACTIVE`] of
+/// its kinetic + elastic energy at its start (else the next cut is
+/// tried). On failure the state is as it was.
+#[allow(clippy::too_many_arguments)]
+fn rescue_substep<S: SecondOrderSystem + ?Sized>(
+    sys: &mut S,
+    state: &mut State,
+    ws: &mut Workspace,
+    p: super::scheme::AlphaParameters,
+    hs: f64,
+    newton: &NewtonSettings,
+    check_energy: bool,
+    stats: &mut StepStats,
+) -> Result<(), Failure> {
+    if newton.rescue_pieces < 2 {
+        return Err(Failure::NotConverged { iterations: 0 });
+    }
+    let e0 = if check_energy { sys.energy_balance(state.t, &state.q, &state.v, &state.a) } else { None };
+    let start = state.clone();
+    let mut m = 2;
+    loop {
+        let mut attempt = (0..m).try_for_each(|i| {
+            state.t = start.t + hs * f64::from(i) / f64::from(m);
+            step_alpha(sys, state, ws, p, hs / f64::from(m), newton, stats)
+        });
+        if attempt.is_ok() && !state.is_finite() {
+            attempt = Err(Failure::Error(IntegrateError::NonFinite { t: state.t }));
+        }
+        if let (Ok(()), Some(e0)) = (&attempt, e0) {
+            let e1 = sys.energy_balance(start.t + hs, &state.q, &state.v, &state.a);
+            let size: f64 = e0.parts.iter().map(|e| e.abs()).sum();
+            let gain = e1.map_or(f64::INFINITY, |e1| e1.total() - e0.total() - 0.5 * hs * (e0.power + e1.power));
+            if gain.is_nan() || gain > ENERGY_ACTIVE * (e0.parts[0] + e0.parts[2]) + 1e-9 * size {
+                stats.energy_refusals += 1;
+                attempt = Err(Failure::EnergyGain);
+            }
+        }
+        match attempt {
+            Ok(()) => {
+                stats.rescued_substeps += 1;
+                state.t = start.t + hs;
+                return Ok(());
+            }
+            Err(failed) => {
+                state.clone_from(&start);
+                // (The predictor's previous acceleration is a refused
+                // piece's.)
+                ws.a_prev_next_t = f64::NAN;
+                if m >= newton.rescue_pieces {
+                    return Err(failed);
+                }
+            }
+        }
+        m *= 2;
     }
 }
 

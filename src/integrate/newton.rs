@@ -53,10 +53,11 @@ pub struct NewtonSettings {
     /// pass at the same iterate), and one that shrinks by less than
     /// a factor of 10 turns chords off for the rest of the solve.
     pub chord_limit: f64,
-    /// Energy-checked sub-steps (default `true`): a sub-step of a passive
-    /// system
-    /// ([`SecondOrderSystem::passive_energy`](super::SecondOrderSystem::passive_energy))
-    /// after which its step's energy has grown by more than
+    /// Energy-checked sub-steps (default `true`): a sub-step of a system
+    /// with an energy account
+    /// ([`SecondOrderSystem::energy_balance`](super::SecondOrderSystem::energy_balance))
+    /// after which its step's energy has grown, beyond the work of its
+    /// moving supports, by more than
     /// [`ENERGY_ACTIVE`](super::ENERGY_ACTIVE) allows is refused and the
     /// step split further, and a failed Newton solve of such a system is
     /// retried with the tangent's fallback at every split (not only from a
@@ -65,6 +66,12 @@ pub struct NewtonSettings {
     /// step (docs/architecture.md, "Energy-checked sub-steps"). Off: the
     /// bare scheme (convergence studies of the scheme itself).
     pub energy_check: bool,
+    /// Local refinement at the finest split (default
+    /// [`RESCUE_PIECES`](super::RESCUE_PIECES), 1 turns it off): a sub-step
+    /// of the finest split ([`max_substeps`](Self::max_substeps)) whose
+    /// generalized-α Newton solve fails is taken again in 2, 4, … up to
+    /// this many pieces before the step fails; only that sub-step is cut.
+    pub rescue_pieces: u32,
 }
 
 /// Default [`NewtonSettings::chord_limit`], m or rad. Measured on
@@ -84,7 +91,15 @@ const CHORD_CONTRACTION: f64 = 0.1;
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        NewtonSettings { max_iterations: 8, max_substeps: 256, relative_tolerance: 1e-12, line_search: true, chord_limit: CHORD_LIMIT, energy_check: true }
+        NewtonSettings {
+            max_iterations: 8,
+            max_substeps: 256,
+            relative_tolerance: 1e-12,
+            line_search: true,
+            chord_limit: CHORD_LIMIT,
+            energy_check: true,
+            rescue_pieces: super::RESCUE_PIECES,
+        }
     }
 }
 

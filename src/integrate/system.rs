@@ -209,19 +209,47 @@ pub trait SecondOrderSystem {
         false
     }
 
-    /// The mechanical energy at `(t, q, v)` of a **passive** system, in
-    /// its three parts `[kinetic, gravitational, elastic]` (J): one that
-    /// nothing outside does work on (supports at rest, no loads or drives;
-    /// gravity and springs conservative, dampers dissipative), so that its
-    /// energy cannot grow. The integrator then refuses a sub-step after
-    /// which the step's energy has grown by more than
-    /// [`ENERGY_ACTIVE`](super::ENERGY_ACTIVE) allows, and splits the
-    /// step: on a
-    /// whipping slack rope the discrete step can gain energy where the
-    /// motion is not resolved. `None` (the default): not passive, or not
-    /// known; nothing is checked.
-    fn passive_energy(&mut self, _t: f64, _q: &[f64], _v: &[f64]) -> Option<[f64; 3]> {
+    /// The energy account of a system whose energy the integrator can
+    /// check, at `(t, q, v, a)`: its mechanical energy in three parts
+    /// `[kinetic, gravitational, elastic]` (J) and the power (W) that the
+    /// prescribed motions of its supports deliver to it there (a moving
+    /// base or anchor target; zero for a **passive** system, one whose
+    /// supports are at rest: gravity and springs conservative, dampers
+    /// dissipative, so its energy cannot grow). Over a sub-step of length
+    /// `h` the energy may then grow by the supports' work, taken as
+    /// `h (P₀ + P₁) / 2`, and by at most
+    /// [`ENERGY_ACTIVE`](super::ENERGY_ACTIVE) more; past that the
+    /// integrator refuses the sub-step and splits the step: on a whipping
+    /// slack rope the discrete step can gain energy where the motion is
+    /// not resolved. `a` is the true acceleration at the state (the
+    /// supports' reactions need it). `None` (the default): loads or drives
+    /// of unknown work, or not known; nothing is checked.
+    fn energy_balance(&mut self, _t: f64, _q: &[f64], _v: &[f64], _a: &[f64]) -> Option<EnergyBalance> {
         None
+    }
+
+    /// Whether [`energy_balance`](Self::energy_balance) gives an account
+    /// (without computing it). Default `false`.
+    fn accounts_energy(&self) -> bool {
+        false
+    }
+}
+
+/// A system's energy and the power its moving supports deliver to it
+/// ([`SecondOrderSystem::energy_balance`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EnergyBalance {
+    /// `[kinetic, gravitational, elastic]`, J.
+    pub parts: [f64; 3],
+    /// Power delivered by the prescribed motion of the supports (a moving
+    /// base or anchor target), W; zero when they are at rest.
+    pub power: f64,
+}
+
+impl EnergyBalance {
+    /// The total `kinetic + gravitational + elastic`, J.
+    pub fn total(&self) -> f64 {
+        self.parts.iter().sum()
     }
 }
 

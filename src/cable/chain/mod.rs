@@ -33,7 +33,7 @@ pub(crate) use sweep::*;
 
 use super::force::{AttachedForce, AttachedPair, ForceElement, PairWrench, PointState, PointWrench};
 use super::spatial::{M6, V6};
-use crate::integrate::SystemError;
+use crate::integrate::{EnergyBalance, SystemError};
 use glam::{DMat3, DVec3};
 
 /// Why a query on a link a rope layout names cannot fail: the layout was
@@ -193,8 +193,11 @@ pub struct Chain {
     /// their law's Gauss–Newton part (positive semi-definite: the static
     /// solve minimises the energy).
     pub(crate) law_gauss_newton: bool,
-    /// Zero accelerations for [`Chain::passive_energy_at`]'s kinematics.
+    /// Zero accelerations for [`Chain::energy_balance_at`]'s kinematics.
     energy_zeros: Vec<f64>,
+    /// Residual scratch for [`Chain::energy_balance_at`] when its supports
+    /// move.
+    energy_residual: Vec<f64>,
 }
 
 impl std::fmt::Debug for Chain {
@@ -249,6 +252,7 @@ impl Chain {
             fell_back: false,
             law_gauss_newton: false,
             energy_zeros: Vec::new(),
+            energy_residual: Vec::new(),
         }
     }
 
@@ -853,30 +857,72 @@ impl Chain {
     /// dissipative: its energy cannot grow.
     pub fn is_passive(&self) -> bool {
         let at_rest = |b: &BaseMotion| matches!(b, BaseMotion::Fixed(_));
-        at_rest(&self.base)
-            && self.anchors.iter().all(|a| at_rest(&a.target))
-            && self.loads.is_empty()
+        at_rest(&self.base) && self.anchors.iter().all(|a| at_rest(&a.target)) && self.passive_inside()
+    }
+
+    /// Whether the only work done on the chain from outside is that of its
+    /// supports' prescribed motion (a moving base or anchor target, which
+    /// [`SecondOrderSystem::energy_balance`](crate::integrate::SecondOrderSystem::energy_balance)
+    /// counts): passive but for the supports
+    /// ([`Chain::is_passive`]).
+    pub fn accounts_energy(&self) -> bool {
+        self.passive_inside()
+    }
+
+    /// No loads, drives or forest wrenches, and only passive force and
+    /// pair elements.
+    fn passive_inside(&self) -> bool {
+        self.loads.is_empty()
             && self.forces.iter().all(|f| f.element.is_passive())
             && self.pairs.iter().all(|p| p.element.is_passive())
             && self.external.is_empty()
             && self.joint_forces.iter().all(|f| *f == 0.0)
     }
 
-    /// For a passive chain ([`Chain::is_passive`]): its energy at
-    /// `(t, q, v)` as `[kinetic, gravitational, elastic]`, J (one
-    /// kinematics pass at zero acceleration: the last residual's poses and
-    /// loads are overwritten). `None` for a chain that is not passive.
-    pub(crate) fn passive_energy_at(&mut self, t: f64, q: &[f64], v: &[f64]) -> Option<[f64; 3]> {
-        if !self.is_passive() || q.len() != self.joints.len() || v.len() != q.len() {
+    /// The chain's energy account at `(t, q, v, a)`
+    /// ([`SecondOrderSystem::energy_balance`](crate::integrate::SecondOrderSystem::energy_balance)):
+    /// `[kinetic, gravitational, elastic]` (J) and the power (W) its
+    /// supports' motion delivers, `−V_base · F_base` (the base's spatial
+    /// velocity and the load the chain puts on it, [`Chain::base_load`])
+    /// plus, for each anchor spring, its force on the chain times its
+    /// target's velocity. A passive chain ([`Chain::is_passive`]) takes one
+    /// kinematics pass at zero acceleration (its power is zero); one with
+    /// moving supports a residual pass at `a` (the base load includes the
+    /// chain's inertia). The last residual's poses and loads are
+    /// overwritten. `None` for a chain without an account
+    /// ([`Chain::accounts_energy`]).
+    pub(crate) fn energy_balance_at(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64]) -> Option<EnergyBalance> {
+        if !self.accounts_energy() || q.len() != self.joints.len() || v.len() != q.len() || a.len() != q.len() {
             return None;
         }
-        let zeros = std::mem::take(&mut self.energy_zeros);
-        let zeros = if zeros.len() == q.len() { zeros } else { vec![0.0; q.len()] };
-        let done = self.kinematics(t, q, v, &zeros);
-        self.energy_zeros = zeros;
-        done.ok()?;
+        let power = if self.is_passive() {
+            let zeros = std::mem::take(&mut self.energy_zeros);
+            let zeros = if zeros.len() == q.len() { zeros } else { vec![0.0; q.len()] };
+            let done = self.kinematics(t, q, v, &zeros);
+            self.energy_zeros = zeros;
+            done.ok()?;
+            0.0
+        } else {
+            let mut r = std::mem::take(&mut self.energy_residual);
+            r.resize(q.len(), 0.0);
+            let done = self.residual_into(t, q, v, a, &mut r);
+            self.energy_residual = r;
+            done.ok()?;
+            let base = self.base.at(t);
+            let bw = base.angular_velocity;
+            let base_vel = V6::new(bw, base.velocity - bw.cross(base.position - self.origin));
+            let anchors: f64 = self
+                .anchors
+                .iter()
+                .map(|an| {
+                    let at = point_state(&self.poses[an.link], self.origin, an.local_point).0;
+                    an.wrench(t, &at).force.dot(an.target.at(t).velocity)
+                })
+                .sum();
+            -base_vel.dot(self.base_load) + anchors
+        };
         let parts = [self.kinetic_energy(), self.gravity_energy(), self.elastic_energy(q) + self.force_element_energy(t)];
-        parts.iter().all(|e| e.is_finite()).then_some(parts)
+        (parts.iter().all(|e| e.is_finite()) && power.is_finite()).then_some(EnergyBalance { parts, power })
     }
 
     /// Elastic energy of the joint springs at `q`, J.

@@ -47,8 +47,11 @@ impl SecondOrderSystem for Chain {
     fn tangent_fell_back(&self) -> bool {
         self.fell_back()
     }
-    fn passive_energy(&mut self, t: f64, q: &[f64], v: &[f64]) -> Option<[f64; 3]> {
-        self.passive_energy_at(t, q, v)
+    fn energy_balance(&mut self, t: f64, q: &[f64], v: &[f64], a: &[f64]) -> Option<crate::integrate::EnergyBalance> {
+        self.energy_balance_at(t, q, v, a)
+    }
+    fn accounts_energy(&self) -> bool {
+        Chain::accounts_energy(self)
     }
     fn position_tolerance(&self) -> f64 {
         self.position_tolerance
