@@ -442,10 +442,14 @@ impl Integrator {
         loop {
             let before = stats.newton_iterations;
             // At the finest split a sub-step is taken as solved (not
-            // energy-checked), and one whose Newton solve fails is cut
-            // further ([`rescue_substep`]).
-            let rescue = n.saturating_mul(2) > max_n;
-            let check = checking && !rescue;
+            // energy-checked), and one whose Newton solve fails there is cut
+            // further ([`rescue_substep`]): for a system with an energy
+            // account at once (each cut is energy-checked), for others only
+            // in the last-resort pass (every split failed once), so that
+            // only a step that would fail pays for it.
+            let finest = n.saturating_mul(2) > max_n;
+            let rescue = finest && ((checking && sys.accounts_energy()) || self.ws.branch_budget != MAX_BRANCH_UPDATES);
+            let check = checking && !finest;
             match self.try_substeps(sys, state, h, n, check, rescue, stats) {
                 Ok(()) => {
                     stats.substeps_used += u64::from(n);
@@ -506,7 +510,8 @@ impl Integrator {
                     let exhausted = next > max_n || next == n;
                     // Every split failed to converge: the last-resort pass,
                     // once, from the first split with a larger
-                    // branch-update budget.
+                    // branch-update budget, its finest split's failing
+                    // sub-steps cut further.
                     if exhausted && not_converged && self.ws.branch_budget == MAX_BRANCH_UPDATES {
                         self.ws.branch_budget = LAST_RESORT_BRANCH_UPDATES;
                         n = start_n;
