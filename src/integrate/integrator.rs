@@ -585,10 +585,15 @@ impl Integrator {
                             if rescue =>
                         {
                             rescue_substep(sys, state, ws, p, hs, newton, checking, stats).map_err(|_| failed)?;
+                            // (Its energy check's pass may have overwritten
+                            // the last residual's.)
+                            false
                         }
-                        other => other?,
+                        other => {
+                            other?;
+                            true
+                        }
                     }
-                    true
                 }
             };
             if !state.is_finite() {
