@@ -71,10 +71,9 @@ pub struct NewtonSettings {
     /// of the finest split ([`max_substeps`](Self::max_substeps)) whose
     /// generalized-α Newton solve fails is taken again in 2, 4, … up to
     /// this many pieces before the step fails; only that sub-step is cut.
-    /// For a system with an energy account
-    /// ([`SecondOrderSystem::energy_balance`](super::SecondOrderSystem::energy_balance))
-    /// each cut is energy-checked and tried at once; for others only in the
-    /// last-resort pass, once every split has failed.
+    /// Only for a system with an energy account
+    /// ([`SecondOrderSystem::energy_balance`](super::SecondOrderSystem::energy_balance)),
+    /// each cut energy-checked.
     pub rescue_pieces: u32,
 }
 
