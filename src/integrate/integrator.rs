@@ -70,8 +70,8 @@ pub struct StepStats {
     ///
     /// [`LinearisationLimits`]: super::LinearisationLimits
     pub newton_fallbacks: usize,
-    /// Sub-steps refused because a passive system's energy grew over its
-    /// step by more than [`ENERGY_ACTIVE`] allows
+    /// Sub-steps refused because a system's energy grew over its step,
+    /// beyond its supports' work, by more than [`ENERGY_ACTIVE`] allows
     /// ([`SecondOrderSystem::energy_balance`]); each refusal splits the
     /// step further.
     pub energy_refusals: usize,
@@ -549,7 +549,6 @@ impl Integrator {
         rescue: bool,
         stats: &mut StepStats,
     ) -> Result<(), Failure> {
-        let checking = self.checks_energy();
         let (t, hs) = (state.t, h / f64::from(n));
         let ws = &mut self.ws;
         let newton = &self.newton;
@@ -586,7 +585,7 @@ impl Integrator {
                         Err(failed @ (Failure::NotConverged { .. } | Failure::Error(IntegrateError::System { source: SystemError::Singular { .. }, .. })))
                             if rescue =>
                         {
-                            rescue_substep(sys, state, ws, p, hs, newton, checking, stats).map_err(|_| failed)?;
+                            rescue_substep(sys, state, ws, p, hs, newton, stats).map_err(|_| failed)?;
                             // (Its energy check's pass may have overwritten
                             // the last residual's.)
                             false
@@ -605,13 +604,9 @@ impl Integrator {
                 // The energy's pass overwrote the last residual's.
                 self.end_evaluated = false;
                 if let Some(e1) = sys.energy_balance(state.t, &state.q, &state.v, &state.a) {
-                    // The gain beyond the supports' work (trapezoidal rule
-                    // on their power).
-                    let gain = e1.total() - e0.total() - 0.5 * hs * (e0.power + e1.power);
-                    let size: f64 = e0.parts.iter().map(|e| e.abs()).sum();
-                    net += gain;
-                    let budget = *budget.get_or_insert(ENERGY_ACTIVE * (e0.parts[0] + e0.parts[2]));
-                    if net > budget + 1e-9 * size {
+                    net += e0.gain_to(&e1, hs);
+                    let budget = *budget.get_or_insert(active_share(&e0));
+                    if net > budget + round_off(&e0) {
                         stats.energy_refusals += 1;
                         return Err(Failure::EnergyGain);
                     }
@@ -621,6 +616,19 @@ impl Integrator {
         }
         Ok(())
     }
+}
+
+/// [`ENERGY_ACTIVE`] of an account's kinetic + elastic energy, J: the
+/// check's budget (a share of the energy in motion and in the springs, not
+/// of the total, whose gravitational part depends on the origin).
+fn active_share(e: &EnergyBalance) -> f64 {
+    ENERGY_ACTIVE * (e.parts[0] + e.parts[2])
+}
+
+/// 1e-9 of an account's size (the sum of its parts' magnitudes), J: the
+/// round-off and Newton tolerance the check lets pass.
+fn round_off(e: &EnergyBalance) -> f64 {
+    1e-9 * e.parts.iter().map(|p| p.abs()).sum::<f64>()
 }
 
 /// Default [`NewtonSettings::rescue_pieces`]: the most pieces a sub-step
@@ -634,13 +642,12 @@ pub const RESCUE_PIECES: u32 = 64;
 /// from `state` (the sub-step's start, which the failed solve left as it
 /// was) in 2, 4, … [`NewtonSettings::rescue_pieces`] pieces with exact
 /// Newton solves. A local refinement of the finest split: only the
-/// sub-step that needs it is cut. The first cut whose pieces all converge
-/// is kept if, for a system with an energy account
-/// ([`SecondOrderSystem::energy_balance`]) and with `check_energy`, its
-/// energy grew beyond its supports' work by at most [`ENERGY_ACTIVE`] of
-/// its kinetic + elastic energy at its start (else the next cut is
-/// tried). On failure the state is as it was.
-#[allow(clippy::too_many_arguments)]
+/// sub-step that needs it is cut. Called only for a system with an energy
+/// account ([`SecondOrderSystem::energy_balance`]): the first cut whose
+/// pieces all converge is kept if the sub-step's energy grew beyond its
+/// supports' work by at most [`ENERGY_ACTIVE`] of its kinetic + elastic
+/// energy at its start (else the next cut is tried). On failure the state
+/// is as it was.
 fn rescue_substep<S: SecondOrderSystem + ?Sized>(
     sys: &mut S,
     state: &mut State,
@@ -648,13 +655,12 @@ fn rescue_substep<S: SecondOrderSystem + ?Sized>(
     p: super::scheme::AlphaParameters,
     hs: f64,
     newton: &NewtonSettings,
-    check_energy: bool,
     stats: &mut StepStats,
 ) -> Result<(), Failure> {
     if newton.rescue_pieces < 2 {
         return Err(Failure::NotConverged { iterations: 0 });
     }
-    let e0 = if check_energy { sys.energy_balance(state.t, &state.q, &state.v, &state.a) } else { None };
+    let e0 = sys.energy_balance(state.t, &state.q, &state.v, &state.a);
     let start = state.clone();
     let mut m = 2;
     loop {
@@ -667,9 +673,8 @@ fn rescue_substep<S: SecondOrderSystem + ?Sized>(
         }
         if let (Ok(()), Some(e0)) = (&attempt, e0) {
             let e1 = sys.energy_balance(start.t + hs, &state.q, &state.v, &state.a);
-            let size: f64 = e0.parts.iter().map(|e| e.abs()).sum();
-            let gain = e1.map_or(f64::INFINITY, |e1| e1.total() - e0.total() - 0.5 * hs * (e0.power + e1.power));
-            if gain.is_nan() || gain > ENERGY_ACTIVE * (e0.parts[0] + e0.parts[2]) + 1e-9 * size {
+            let gain = e1.map_or(f64::INFINITY, |e1| e0.gain_to(&e1, hs));
+            if gain.is_nan() || gain > active_share(&e0) + round_off(&e0) {
                 stats.energy_refusals += 1;
                 attempt = Err(Failure::EnergyGain);
             }

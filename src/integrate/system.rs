@@ -251,6 +251,12 @@ impl EnergyBalance {
     pub fn total(&self) -> f64 {
         self.parts.iter().sum()
     }
+
+    /// The energy gained from this account to `end`, `h` (s) later, beyond
+    /// the supports' work over it (trapezoidal rule on their power), J.
+    pub fn gain_to(&self, end: &EnergyBalance, h: f64) -> f64 {
+        end.total() - self.total() - 0.5 * h * (self.power + end.power)
+    }
 }
 
 /// How far the fast preset's single linearised solve may go before its

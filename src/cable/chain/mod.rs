@@ -856,8 +856,13 @@ impl Chain {
     /// gravity) are then conservative and its dampers and friction
     /// dissipative: its energy cannot grow.
     pub fn is_passive(&self) -> bool {
+        self.supports_at_rest() && self.passive_inside()
+    }
+
+    /// The base and every anchor target (of every limb) at rest.
+    fn supports_at_rest(&self) -> bool {
         let at_rest = |b: &BaseMotion| matches!(b, BaseMotion::Fixed(_));
-        at_rest(&self.base) && self.anchors.iter().all(|a| at_rest(&a.target)) && self.passive_inside()
+        at_rest(&self.base) && self.anchors.iter().all(|a| at_rest(&a.target))
     }
 
     /// Whether the only work done on the chain from outside is that of its
@@ -895,7 +900,8 @@ impl Chain {
         if !self.accounts_energy() || q.len() != self.joints.len() || v.len() != q.len() || a.len() != q.len() {
             return None;
         }
-        let power = if self.is_passive() {
+        // (`accounts_energy` held: passive when the supports are at rest.)
+        let power = if self.supports_at_rest() {
             let zeros = std::mem::take(&mut self.energy_zeros);
             let zeros = if zeros.len() == q.len() { zeros } else { vec![0.0; q.len()] };
             let done = self.kinematics(t, q, v, &zeros);
