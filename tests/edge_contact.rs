@@ -261,3 +261,99 @@ component = "y"
     assert!(deepest > -1e-3, "the rope went {} m into a post", -deepest);
     assert!(lowest > 0.008 - 1e-3, "the rope's middle sank into the ground: {lowest} m");
 }
+
+/// A newcomer's rope over a drum, laid by hand: 16 mm steel rope (60
+/// elements, lightly damped, 0.003 s) from a pin 2 m below the drum's
+/// left side, up and over a fixed steel drum of radius 0.5 m on a
+/// half-circle 2.2 cm off its surface, and down to a 200 kg ball. Laid
+/// bent (not moulded to the path) and 2 cm off, it springs onto the
+/// drum at up to 22 g in its first frame step. Its contacts must catch
+/// it: over 1.5 s the rope's surface (about its elements, the chords
+/// between its nodes) never goes 1 mm into the drum (measured: 0.40 mm
+/// while it lands), at the end it rests less
+/// than 0.1 mm in (measured 59 µm, a chord between two contacts), and
+/// it holds the ball (tension at the ball m g within 2 %; measured
+/// −0.2 %). Before the contact search's reach counted the nodes'
+/// accelerations (gravity's only), the first frame step ended 8 mm
+/// inside the drum with no contact, the next search found the nodes
+/// there, and the run diverged at 0.017 s.
+#[test]
+fn a_rope_springing_onto_a_drum_from_rest_is_caught_by_its_contacts() {
+    let r = 0.53;
+    let mut path = vec![(-r, -2.0)];
+    path.extend((0..=24).map(|k| {
+        let a = std::f64::consts::PI * (1.0 - k as f64 / 24.0);
+        (r * a.cos(), r * a.sin())
+    }));
+    path.push((r, -3.2));
+    let length: f64 = path.windows(2).map(|w| ((w[1].0 - w[0].0).powi(2) + (w[1].1 - w[0].1).powi(2)).sqrt()).sum();
+    let points: Vec<String> = path.iter().map(|(x, y)| format!("[{x}, {y}, 0.0]")).collect();
+    let source = format!(
+        r#"[simulation]
+duration = 1.5
+dt = 0.016666666666666666
+
+[[body]]
+name = "drum"
+type = "fixed"
+shape = "cylinder"
+radius = 0.5
+half_height = 0.3
+rotation = [90.0, 0.0, 0.0]
+
+[[body]]
+name = "ball"
+type = "dynamic"
+shape = "ball"
+radius = 0.2
+mass = 200.0
+position = [{r}, -3.2, 0.0]
+
+[[cable]]
+name = "rope"
+length = {length}
+segments = 60
+diameter = 0.016
+material = "steel_wire_rope_6x36_iwrc"
+damping = 0.003
+start = {{ world = [{}, -2.0, 0.0] }}
+end = {{ body = "ball" }}
+path = [{}]
+
+[[probe]]
+name = "tension"
+cable = "rope"
+quantity = "tension"
+s = {}
+"#,
+        -r,
+        points.join(", "),
+        length - 0.05
+    );
+    let sc = scenario::parse(&source, "drum.toml").unwrap_or_else(|e| panic!("{e}"));
+    let mut world = bevy_rapier_cable::sim::World::new(sc).unwrap_or_else(|e| panic!("{e}"));
+    let (mut deepest, mut last) = (f64::NEG_INFINITY, 0.0);
+    let mut row = Vec::new();
+    for frame in 0..90 {
+        world.step().unwrap_or_else(|e| panic!("frame {frame}: {e}"));
+        // The rope's centreline (its elements, the chords between its
+        // nodes) nearest the drum's axis.
+        let nodes = world.rope("rope").unwrap().nodes();
+        let nearest = nodes
+            .windows(2)
+            .map(|w| {
+                let (a, b) = (w[0].truncate(), w[1].truncate());
+                let f = (-a.dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+                (a + (b - a) * f).length()
+            })
+            .fold(f64::INFINITY, f64::min);
+        last = 0.5 + 0.008 - nearest;
+        deepest = deepest.max(last);
+    }
+    world.sample(&mut row);
+    let weight = 200.0 * 9.81;
+    println!("the rope's surface into the drum: at most {deepest:.3e} m, at the end {last:.3e} m; tension at the ball {:.1} N vs m g = {weight:.1} N", row[0]);
+    assert!(deepest < 1e-3, "the rope went {deepest} m into the drum");
+    assert!(last < 1e-4, "the rope rests {last} m into the drum");
+    assert!((row[0] / weight - 1.0).abs() < 0.02, "tension {} N vs {weight} N", row[0]);
+}
