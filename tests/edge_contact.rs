@@ -279,57 +279,7 @@ component = "y"
 /// there, and the run diverged at 0.017 s.
 #[test]
 fn a_rope_springing_onto_a_drum_from_rest_is_caught_by_its_contacts() {
-    let r = 0.53;
-    let mut path = vec![(-r, -2.0)];
-    path.extend((0..=24).map(|k| {
-        let a = std::f64::consts::PI * (1.0 - k as f64 / 24.0);
-        (r * a.cos(), r * a.sin())
-    }));
-    path.push((r, -3.2));
-    let length: f64 = path.windows(2).map(|w| ((w[1].0 - w[0].0).powi(2) + (w[1].1 - w[0].1).powi(2)).sqrt()).sum();
-    let points: Vec<String> = path.iter().map(|(x, y)| format!("[{x}, {y}, 0.0]")).collect();
-    let source = format!(
-        r#"[simulation]
-duration = 1.5
-dt = 0.016666666666666666
-
-[[body]]
-name = "drum"
-type = "fixed"
-shape = "cylinder"
-radius = 0.5
-half_height = 0.3
-rotation = [90.0, 0.0, 0.0]
-
-[[body]]
-name = "ball"
-type = "dynamic"
-shape = "ball"
-radius = 0.2
-mass = 200.0
-position = [{r}, -3.2, 0.0]
-
-[[cable]]
-name = "rope"
-length = {length}
-segments = 60
-diameter = 0.016
-material = "steel_wire_rope_6x36_iwrc"
-damping = 0.003
-start = {{ world = [{}, -2.0, 0.0] }}
-end = {{ body = "ball" }}
-path = [{}]
-
-[[probe]]
-name = "tension"
-cable = "rope"
-quantity = "tension"
-s = {}
-"#,
-        -r,
-        points.join(", "),
-        length - 0.05
-    );
+    let source = scenario_run::drum_scenario(1.5);
     let sc = scenario::parse(&source, "drum.toml").unwrap_or_else(|e| panic!("{e}"));
     let mut world = bevy_rapier_cable::sim::World::new(sc).unwrap_or_else(|e| panic!("{e}"));
     let (mut deepest, mut last) = (f64::NEG_INFINITY, 0.0);
