@@ -140,6 +140,45 @@ impl ImpactLaw {
         (f, k_t, c)
     }
 
+    /// The impact of a mass `mass` (kg) striking a rigid plane at `speed`
+    /// (m/s, > 0) under this law alone: its coefficient of restitution
+    /// (exit speed over `speed`) and the contact's duration (s), from the
+    /// clamped law's equation of motion `m δ̈ = −F(δ, δ̇)` integrated by
+    /// RK4 in 2 000 steps over three times the undamped depth's time
+    /// `δ_max/speed` (and on until it leaves, its exit interpolated
+    /// within the last step; verification case §7d's ODE). `None` for a
+    /// non-positive or non-finite mass or speed, or a contact that does
+    /// not end within twenty times that span. What a rope element's
+    /// strike gives under the steel law (`CableContact::steel`):
+    /// docs/verification.md, "Contact law".
+    pub fn restitution(&self, mass: f64, speed: f64) -> Option<(f64, f64)> {
+        if !(mass > 0.0 && speed > 0.0 && mass.is_finite() && speed.is_finite()) {
+            return None;
+        }
+        let e = self.exponent;
+        // The undamped law's deepest point: ½ m u² = K δ^(e+1)/(e+1).
+        let deepest = ((e + 1.0) * mass * speed * speed / (2.0 * self.stiffness)).powf(1.0 / (e + 1.0));
+        let dt = 3.0 * deepest / speed / 2000.0;
+        let acceleration = |x: f64, v: f64| -self.force(x, v).0 / mass;
+        let (mut x, mut v, mut t) = (0.0f64, speed, 0.0f64);
+        for _ in 0..40_000 {
+            let (x0, v0) = (x, v);
+            let (k1x, k1v) = (v, acceleration(x, v));
+            let (k2x, k2v) = (v + 0.5 * dt * k1v, acceleration(x + 0.5 * dt * k1x, v + 0.5 * dt * k1v));
+            let (k3x, k3v) = (v + 0.5 * dt * k2v, acceleration(x + 0.5 * dt * k2x, v + 0.5 * dt * k2v));
+            let (k4x, k4v) = (v + dt * k3v, acceleration(x + dt * k3x, v + dt * k3v));
+            x += dt * (k1x + 2.0 * k2x + 2.0 * k3x + k4x) / 6.0;
+            v += dt * (k1v + 2.0 * k2v + 2.0 * k3v + k4v) / 6.0;
+            t += dt;
+            if x <= 0.0 && v < 0.0 {
+                // The exit within the step, linearly.
+                let f = x0 / (x0 - x);
+                return Some((-(v0 + f * (v - v0)) / speed, t - dt + f * dt));
+            }
+        }
+        None
+    }
+
     /// Energy stored in the spring part at penetration `depth` (m):
     /// `K δ^(e+1)/(e+1)`, J.
     pub fn potential(&self, depth: f64) -> f64 {
