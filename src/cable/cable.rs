@@ -825,7 +825,11 @@ impl Cable {
     /// `angular` (N·m·s, world): its rates jump by
     /// `(M + h C + h² K)⁻¹ Jᵀ (L + r × P, P)` at once (the O(n)
     /// articulated-body solve of the implicit tangent), and the
-    /// acceleration is recomputed at the new rates. `h` (s, ≥ 0) is the
+    /// acceleration is recomputed at the new rates (the integrator's
+    /// history, generalized-α's `â`, kept from before the jump, and its
+    /// predictor started afresh: on a damped rope the recomputed
+    /// acceleration holds the dampers' instant answer to the jump, which
+    /// carried into the next step put kilojoules into the rope). `h` (s, ≥ 0) is the
     /// time over which the chain's springs and dampers answer the impulse:
     /// 0 for the mass matrix alone (the instant response), the step size
     /// for an impulse taken in a step (a loop closed by a stiff anchor
@@ -869,6 +873,7 @@ impl Cable {
             return bad("the impulse gives no finite rates");
         }
         let old = self.state.v.clone();
+        let old_hat = self.state.a_hat.clone();
         self.state.v.iter_mut().zip(&dv).for_each(|(v, d)| *v += d);
         if let Err(e) = self.state.recompute_acceleration(&mut self.model.chain) {
             self.state.v = old;
@@ -876,6 +881,19 @@ impl Cable {
             self.refresh();
             return Err(e.into());
         }
+        // The scheme's history (generalized-α's â) goes on from before the
+        // jump: the acceleration just recomputed holds the rope dampers'
+        // answer to the jump in the rates (their relative rates, damped in
+        // microseconds), which carried in â entered the next step's
+        // velocity explicitly (`v₁ = v₀ + h (¼ â₀ + ¾ a₁)` at ρ∞ = 0): a
+        // 500 N·s push on a 1 t payload hanging on 10 m of steel rope
+        // damped at 0.01 s put 2.9 kJ into the rope's elements next to it
+        // in that step, and a 5 N·s kick on an element in its middle
+        // 6.5 kJ (`tests/impulse_on_damped_rope.rs`). The implicit step
+        // answers the jump itself; Newton starts from the recomputed
+        // acceleration, not from an extrapolation across the jump.
+        self.state.a_hat.copy_from_slice(&old_hat);
+        self.integrator.forget_predictor();
         self.refresh();
         Ok(())
     }

@@ -348,6 +348,14 @@ impl Integrator {
         self.calm = 0;
     }
 
+    /// Forgets the predictor's previous acceleration: the next step's
+    /// Newton starts from the state's acceleration, not from its linear
+    /// extrapolation (after a jump in the rates,
+    /// [`Cable::apply_impulse`](crate::cable::Cable::apply_impulse)).
+    pub(crate) fn forget_predictor(&mut self) {
+        self.ws.a_prev_next_t = f64::NAN;
+    }
+
     /// Puts `state` back where it was at the start of the last
     /// [`step`](Self::step) call (time included): for a caller that rejects
     /// a step the integrator accepted (a cable whose element stretched past
