@@ -809,12 +809,40 @@ impl Cable {
                 });
             }
         }
+        self.take_rates(v, false)
+    }
+
+    /// The chain's rates set to `v` and the acceleration recomputed there
+    /// (on an error, the old rates put back and the acceleration
+    /// recomputed at them). With
+    /// `jump`, `v` is a jump in the rates within the run (an impulse): the
+    /// integrator's history (generalized-α's `â`) goes on from before it
+    /// and its predictor starts afresh ([`Cable::apply_impulse`]); without,
+    /// `v` starts the run (initial velocities) from the consistent
+    /// acceleration.
+    fn take_rates(&mut self, v: Vec<f64>, jump: bool) -> Result<(), CableError> {
+        let old_hat = jump.then(|| self.state.a_hat.clone());
         let old = std::mem::replace(&mut self.state.v, v);
         if let Err(e) = self.state.recompute_acceleration(&mut self.model.chain) {
             self.state.v = old;
             let _ = self.state.recompute_acceleration(&mut self.model.chain);
             self.refresh();
             return Err(e.into());
+        }
+        if let Some(old_hat) = old_hat {
+            // The acceleration just recomputed holds the rope dampers'
+            // answer to the jump (their relative rates, damped in
+            // microseconds), which carried in â entered the next step's
+            // velocity explicitly (`v₁ = v₀ + h (¼ â₀ + ¾ a₁)` at ρ∞ = 0):
+            // a 500 N·s push on a 1 t payload hanging on 10 m of steel
+            // rope damped at 0.01 s put 2.9 kJ into the rope's elements
+            // next to it in that step, and a 5 N·s kick on an element in
+            // its middle 6.5 kJ (`tests/impulse_on_damped_rope.rs`). The
+            // implicit step answers the jump itself; Newton starts from
+            // the recomputed acceleration, not from an extrapolation
+            // across the jump.
+            self.state.a_hat.copy_from_slice(&old_hat);
+            self.integrator.forget_predictor();
         }
         self.refresh();
         Ok(())
@@ -872,30 +900,8 @@ impl Cable {
         if !dv.iter().all(|x| x.is_finite()) {
             return bad("the impulse gives no finite rates");
         }
-        let old = self.state.v.clone();
-        let old_hat = self.state.a_hat.clone();
-        self.state.v.iter_mut().zip(&dv).for_each(|(v, d)| *v += d);
-        if let Err(e) = self.state.recompute_acceleration(&mut self.model.chain) {
-            self.state.v = old;
-            let _ = self.state.recompute_acceleration(&mut self.model.chain);
-            self.refresh();
-            return Err(e.into());
-        }
-        // The scheme's history (generalized-α's â) goes on from before the
-        // jump: the acceleration just recomputed holds the rope dampers'
-        // answer to the jump in the rates (their relative rates, damped in
-        // microseconds), which carried in â entered the next step's
-        // velocity explicitly (`v₁ = v₀ + h (¼ â₀ + ¾ a₁)` at ρ∞ = 0): a
-        // 500 N·s push on a 1 t payload hanging on 10 m of steel rope
-        // damped at 0.01 s put 2.9 kJ into the rope's elements next to it
-        // in that step, and a 5 N·s kick on an element in its middle
-        // 6.5 kJ (`tests/impulse_on_damped_rope.rs`). The implicit step
-        // answers the jump itself; Newton starts from the recomputed
-        // acceleration, not from an extrapolation across the jump.
-        self.state.a_hat.copy_from_slice(&old_hat);
-        self.integrator.forget_predictor();
-        self.refresh();
-        Ok(())
+        let v = self.state.v.iter().zip(&dv).map(|(v, d)| v + d).collect();
+        self.take_rates(v, true)
     }
 
     /// Adds a distributed load: `load(element, midpoint, midpoint velocity)`
