@@ -10,7 +10,7 @@ use glam::DVec3;
 
 #[path = "common/scenario_run.rs"]
 mod scenario_run;
-use scenario_run::{landing, run_scenario, run_shipped_variant};
+use scenario_run::{landing, run_scenario, run_shipped_variant, segment_distance};
 
 /// The shipped `rope_on_rope.toml` with the upper rope let go at `height`
 /// (m) above the ground. Rows: t, ground force (y), lower y and upper y at
@@ -66,25 +66,10 @@ fn a_rope_dropped_on_another_cable_at_speed_does_not_pass_through() {
 /// smallest distance between any element of `a` and any element of `b`
 /// (segment–segment, exact), m.
 fn closest_between(a: &[DVec3], b: &[DVec3]) -> f64 {
-    let segment = |p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3| {
-        let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
-        let (aa, e, f, c, bb) = (d1.dot(d1), d2.dot(d2), d2.dot(r), d1.dot(r), d1.dot(d2));
-        let den = aa * e - bb * bb;
-        let mut s = if den > 1e-15 { ((bb * f - c * e) / den).clamp(0.0, 1.0) } else { 0.0 };
-        let mut t = (bb * s + f) / e;
-        if t < 0.0 {
-            t = 0.0;
-            s = (-c / aa).clamp(0.0, 1.0);
-        } else if t > 1.0 {
-            t = 1.0;
-            s = ((bb - c) / aa).clamp(0.0, 1.0);
-        }
-        ((p1 + d1 * s) - (p2 + d2 * t)).length()
-    };
     let mut m = f64::INFINITY;
     for x in a.windows(2) {
         for y in b.windows(2) {
-            m = m.min(segment(x[0], x[1], y[0], y[1]));
+            m = m.min(segment_distance(x[0], x[1], y[0], y[1]));
         }
     }
     m

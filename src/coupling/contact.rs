@@ -142,6 +142,9 @@ struct Search {
     velocities: Vec<Vec<DVec3>>,
     /// The node accelerations it used (magnitudes), m/s².
     accelerations: Vec<Vec<f64>>,
+    /// The same as vectors (world, m/s²), for the reach of the ropes'
+    /// touches with each other ([`rope_pairs`]).
+    vectors: Vec<Vec<DVec3>>,
 }
 
 /// A pair contact's friction state kept from one step to the next, found
@@ -1032,16 +1035,38 @@ pub(crate) fn add_contacts(
 fn node_accelerations(cable: &mut Cable, memory: &mut FrictionMemory, ropes: &[(usize, Vec<DVec3>, Vec<DVec3>)]) -> Vec<Vec<f64>> {
     let t = cable.time();
     let fits = |old: &[Vec<DVec3>]| old.len() == ropes.len() && old.iter().zip(ropes).all(|(o, r)| o.len() == r.2.len());
-    let out = match memory.searched.take() {
+    let lengths = |vectors: &[Vec<DVec3>]| vectors.iter().map(|r| r.iter().map(|a| a.length()).collect()).collect();
+    let (out, vectors) = match memory.searched.take() {
         Some(last) if last.time < t && fits(&last.velocities) => {
-            ropes.iter().zip(&last.velocities).map(|((_, _, v), o)| v.iter().zip(o).map(|(v, o)| (*v - *o).length() / (t - last.time)).collect()).collect()
+            let dt = t - last.time;
+            let changes: Vec<Vec<DVec3>> = ropes.iter().zip(&last.velocities).map(|((_, _, v), o)| v.iter().zip(o).map(|(v, o)| *v - *o).collect()).collect();
+            (
+                changes.iter().map(|r| r.iter().map(|d| d.length() / dt).collect()).collect(),
+                changes.iter().map(|r| r.iter().map(|d| *d / dt).collect()).collect(),
+            )
         }
-        Some(last) if fits(&last.velocities) => last.accelerations,
-        _ if cable.steps == 0 => start_accelerations(cable, ropes),
-        _ => ropes.iter().map(|(_, _, v)| vec![0.0; v.len()]).collect(),
+        Some(last) if fits(&last.velocities) => (last.accelerations, last.vectors),
+        _ if cable.steps == 0 => {
+            let vectors = start_accelerations(cable, ropes);
+            (lengths(&vectors), vectors)
+        }
+        _ => (ropes.iter().map(|(_, _, v)| vec![0.0; v.len()]).collect(), ropes.iter().map(|(_, _, v)| vec![DVec3::ZERO; v.len()]).collect()),
     };
-    memory.searched = Some(Search { time: t, velocities: ropes.iter().map(|(_, _, v)| v.clone()).collect(), accelerations: out.clone() });
+    memory.searched = Some(Search { time: t, velocities: ropes.iter().map(|(_, _, v)| v.clone()).collect(), accelerations: out.clone(), vectors });
     out
+}
+
+impl FrictionMemory {
+    /// The node accelerations (world, m/s², per rope of the cable) of
+    /// `cable`'s first search for colliders ([`add_contacts`], from its
+    /// consistent start acceleration), while the cable has taken no step;
+    /// empty after (see [`rope_pairs`]).
+    pub(crate) fn start_accelerations_of(&self, cable: &Cable) -> &[Vec<DVec3>] {
+        match &self.searched {
+            Some(s) if cable.steps == 0 && s.time == cable.time() => &s.vectors,
+            _ => &[],
+        }
+    }
 }
 
 /// [`node_accelerations`] at a cable's first search: the nodes'
@@ -1050,21 +1075,15 @@ fn node_accelerations(cable: &mut Cable, memory: &mut FrictionMemory, ropes: &[(
 /// at the state. They include the base's velocity at that time (a moving
 /// support's speed read as an acceleration: a larger reach, no missed
 /// contact). Zero if a kinematics pass fails.
-fn start_accelerations(cable: &mut Cable, ropes: &[(usize, Vec<DVec3>, Vec<DVec3>)]) -> Vec<Vec<f64>> {
-    let zero: Vec<Vec<f64>> = ropes.iter().map(|(_, _, v)| vec![0.0; v.len()]).collect();
+fn start_accelerations(cable: &mut Cable, ropes: &[(usize, Vec<DVec3>, Vec<DVec3>)]) -> Vec<Vec<DVec3>> {
+    let zero: Vec<Vec<DVec3>> = ropes.iter().map(|(_, _, v)| vec![DVec3::ZERO; v.len()]).collect();
     let (t, q, v, a) = (cable.state.t, cable.state.q.clone(), cable.state.v.clone(), cable.state.a.clone());
     let zeros = vec![0.0; q.len()];
     let out = if cable.model.chain.kinematics(t, &q, &a, &zeros).is_ok() {
         ropes
             .iter()
             .zip(&zero)
-            .map(|((r, ..), z)| {
-                cable
-                    .rope(*r)
-                    .map(|view| view.node_velocities())
-                    .filter(|x| x.len() == z.len())
-                    .map_or_else(|| z.clone(), |x| x.iter().map(|x| x.length()).collect())
-            })
+            .map(|((r, ..), z)| cable.rope(*r).map(|view| view.node_velocities()).filter(|x| x.len() == z.len()).unwrap_or_else(|| z.clone()))
             .collect()
     } else {
         zero
@@ -1478,6 +1497,9 @@ struct Segment {
     after: Option<DVec3>,
     va: DVec3,
     vb: DVec3,
+    /// The nodes' accelerations (m/s², zero where not known).
+    aa: DVec3,
+    ab: DVec3,
     element_length: f64,
     radius: f64,
     /// The arc lengths (m) from the rope's start within which a touch is
@@ -1567,10 +1589,11 @@ fn closest_on_segments(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (f64, f64)
 /// [`PairContact`] (see [`rope_pairs`]).
 /// Returns how fast the contacts close (m/s), for the step's passes.
 pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, memory: &mut FrictionMemory, h: f64) -> f64 {
-    if cannot_touch_itself(cable, h) {
+    let accelerations = memory.start_accelerations_of(cable).to_vec();
+    if cannot_touch_itself(cable, &accelerations, h) {
         return 0.0;
     }
-    let (pairs, approach) = rope_pairs(&[(&*cable, contact)], h, true);
+    let (pairs, approach) = rope_pairs(&[(&*cable, contact)], &[&accelerations], h, true);
     // Each with its friction, from the same touch at the end of the last
     // step.
     let chain = &cable.model.chain;
@@ -1622,7 +1645,7 @@ fn too_near_along(apart: usize, element_length: f64, radius: f64) -> bool {
 /// `|t₁ − t₂|/√(1 − |t₁ − t₂|²/4)` (no inverse trigonometry; within 1e-4
 /// of the angle for the 0.025 rad between elements of a 0.8π arc of 100
 /// elements).
-fn cannot_touch_itself(cable: &Cable, h: f64) -> bool {
+fn cannot_touch_itself(cable: &Cable, accelerations: &[Vec<DVec3>], h: f64) -> bool {
     if cable.ropes() != 1 {
         return false;
     }
@@ -1657,6 +1680,12 @@ fn cannot_touch_itself(cable: &Cable, h: f64) -> bool {
         }
         last = Some(t);
         jump = jump.max((velocities[i + 1] - velocities[i]).length());
+    }
+    // What the nodes' accelerations add over the step (`h² |Δa|` between
+    // neighbours), as [`rope_pairs`] counts it.
+    if let Some(a) = accelerations.first().filter(|a| a.len() == nodes.len()) {
+        let jump_a = a.windows(2).map(|w| (w[1] - w[0]).length()).fold(0.0f64, f64::max);
+        jump += 0.5 * h * jump_a;
     }
     if !(total.is_finite() && shortest > 0.0 && jump.is_finite()) {
         return false;
@@ -1741,9 +1770,26 @@ fn reaching_other_cables(segments: &[Segment], boxes: &[(DVec3, DVec3)], cables:
 /// elements' boxes along the axis of their largest spread (O(n log n) for
 /// ropes that are not balled up). `within`: the pairs within each cable
 /// (its ropes with themselves and each other), else only those between
-/// two cables. Returns the pairs and, per cable, how fast its contacts
-/// close (m/s), for the step's passes.
-pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: bool) -> (Vec<RopePair>, Vec<f64>) {
+/// two cables. `accelerations`: per cable, its ropes' node accelerations
+/// at its first step (world, m/s²; [`FrictionMemory::start_accelerations_of`],
+/// empty after it): an element's reach counts what its acceleration adds
+/// over the step (`h² |a|`, relative to the others), as a collider
+/// contact's does ([`add_contacts`]), so that a rope laid bent near itself
+/// and let go from rest (a loose knot), whose speeds give no reach, finds
+/// the touches it springs into within its first step. Only then: with the
+/// accelerations of a whipping rope (the change of its speeds between
+/// searches) in every step's reach, the pairs found far within it, their
+/// normals frozen for the step, pushed the slack legs of an undamped sling
+/// apart with 95 J the run did not have
+/// (`scenarios::an_undamped_sling_laid_slack_from_one_hook_never_gains_energy`).
+/// Returns the pairs and, per cable, how fast its contacts close (m/s:
+/// their fastest relative node speed, and for a touch within reach its
+/// speed plus what its acceleration adds in the step; not what the
+/// accelerations of near elements without a touch add: at a slack rope's
+/// first step the start accelerations of the elements next to a pin
+/// differ by 2 000 m/s², which as a closing speed asked for passes no
+/// touch needed), for the step's passes.
+pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], accelerations: &[&[Vec<DVec3>]], h: f64, within: bool) -> (Vec<RopePair>, Vec<f64>) {
     let mut segments = Vec::new();
     // Two elements close at their relative speed: each box is padded by
     // the rope's radius and twice its speed relative to the mean of all
@@ -1766,15 +1812,37 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: boo
             let margin = element_length.max(std::f64::consts::PI * radius);
             let length = view.length();
             let free = (if held_first { margin } else { f64::NEG_INFINITY }, if held_last { length - margin } else { f64::INFINITY });
+            let known = accelerations.get(c).and_then(|a| a.get(rope)).filter(|a| a.len() == nodes.len());
+            let acceleration = |k: usize| known.map_or(DVec3::ZERO, |a| a[k]);
             for i in 0..nodes.len().saturating_sub(1) {
                 let (va, vb) = (velocities[i], velocities[i + 1]);
+                let (aa, ab) = (acceleration(i), acceleration(i + 1));
                 let (before, after) = (i.checked_sub(1).map(|k| nodes[k]), nodes.get(i + 2).copied());
-                segments.push(Segment { cable: c, rope, element: i, a: nodes[i], b: nodes[i + 1], before, after, va, vb, element_length, radius, free });
+                segments.push(Segment {
+                    cable: c,
+                    rope,
+                    element: i,
+                    a: nodes[i],
+                    b: nodes[i + 1],
+                    before,
+                    after,
+                    va,
+                    vb,
+                    aa,
+                    ab,
+                    element_length,
+                    radius,
+                    free,
+                });
             }
         }
     }
     let mean = segments.iter().fold(DVec3::ZERO, |m, g| m + g.va + g.vb) / (2.0 * segments.len().max(1) as f64);
-    let pads: Vec<f64> = segments.iter().map(|g| g.radius + 2.0 * h * (g.va - mean).length().max((g.vb - mean).length())).collect();
+    let mean_a = segments.iter().fold(DVec3::ZERO, |m, g| m + g.aa + g.ab) / (2.0 * segments.len().max(1) as f64);
+    let pads: Vec<f64> = segments
+        .iter()
+        .map(|g| g.radius + 2.0 * h * (g.va - mean).length().max((g.vb - mean).length()) + h * h * (g.aa - mean_a).length().max((g.ab - mean_a).length()))
+        .collect();
     let boxes: Vec<(DVec3, DVec3)> = segments.iter().zip(&pads).map(|(g, &pad)| (g.a.min(g.b) - DVec3::splat(pad), g.a.max(g.b) + DVec3::splat(pad))).collect();
     // Candidates: a sweep over the boxes along the axis in which the
     // elements spread most (a rope's length, for a rope that is not balled
@@ -1823,8 +1891,9 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: boo
             // the two half lengths, the two radii and the reach of their
             // fastest relative node motion.
             let fastest = (gi.va - gj.va).length().max((gi.va - gj.vb).length()).max((gi.vb - gj.va).length()).max((gi.vb - gj.vb).length());
+            let fastest_change = (gi.aa - gj.aa).length().max((gi.aa - gj.ab).length()).max((gi.ab - gj.aa).length()).max((gi.ab - gj.ab).length());
             let half = 0.5 * (gi.a.distance(gi.b) + gj.a.distance(gj.b));
-            if (gi.a + gi.b).distance(gj.a + gj.b) * 0.5 - half - radii > 2.0 * h * fastest + 0.5 * least {
+            if (gi.a + gi.b).distance(gj.a + gj.b) * 0.5 - half - radii > 2.0 * h * fastest + h * h * fastest_change + 0.5 * least {
                 continue;
             }
             // Two elements this near count their fastest relative node
@@ -1870,10 +1939,16 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], h: f64, within: boo
                 let (pa, pb) = (gi.a.lerp(gi.b, fa), gj.a.lerp(gj.b, fb));
                 let d = pa.distance(pb);
                 let relative = gi.va.lerp(gi.vb, fa) - gj.va.lerp(gj.vb, fb);
-                let reach = 2.0 * h * relative.length() + 0.5 * least;
+                let change = gi.aa.lerp(gi.ab, fa) - gj.aa.lerp(gj.ab, fb);
+                let reach = 2.0 * h * relative.length() + h * h * change.length() + 0.5 * least;
                 if d - radii > reach || d <= 1e-9 * least {
                     continue;
                 }
+                // A touch within reach closes at most at its speed plus
+                // what its acceleration adds in the step.
+                let closing = relative.length() + h * change.length();
+                approach[gi.cable] = approach[gi.cable].max(closing);
+                approach[gj.cable] = approach[gj.cable].max(closing);
                 let normal = (pa - pb) / d;
                 let (ca, cb) = (cables[gi.cable].0, cables[gj.cable].0);
                 let (Some((link_a, point_a)), Some((link_b, point_b))) = (ca.rope_point(gi.rope, sa), cb.rope_point(gj.rope, sb)) else {
@@ -2129,14 +2204,14 @@ mod tests {
         let straight = free_rope(10.0, 100, vec![DVec3::ZERO, DVec3::new(10.0, 0.0, 0.0)]);
         let bent = free_rope(0.8 * std::f64::consts::PI * 2.0, 100, arc(2.0, 0.8 * std::f64::consts::PI, 100));
         for (name, cable) in [("straight", &straight), ("0.8π arc", &bent)] {
-            assert!(cannot_touch_itself(cable, h), "{name}: the search should be skipped");
-            let (pairs, approach) = rope_pairs(&[(cable, &contact)], h, true);
+            assert!(cannot_touch_itself(cable, &[], h), "{name}: the search should be skipped");
+            let (pairs, approach) = rope_pairs(&[(cable, &contact)], &[], h, true);
             assert!(pairs.is_empty() && approach[0] == 0.0, "{name}: the search found {} pairs, approach {}", pairs.len(), approach[0]);
         }
         for (radius, turn) in [(0.025, 1.05 * std::f64::consts::PI), (0.5, 2.0 * std::f64::consts::PI)] {
             let length = radius * turn;
             let cable = free_rope(length, 40, arc(radius, turn, 40));
-            assert!(!cannot_touch_itself(&cable, h), "turning by {turn} rad at r = {radius} m: the search should run");
+            assert!(!cannot_touch_itself(&cable, &[], h), "turning by {turn} rad at r = {radius} m: the search should run");
         }
         // A hairpin: two 1 m legs 1.98 cm apart (centres: pressed 0.2 mm
         // into each other), joined by a half circle.
@@ -2149,8 +2224,8 @@ mod tests {
         path.extend((0..=20).map(|k| DVec3::new(-0.05 * k as f64, 2.0 * r, 0.0)));
         let length = 2.0 + std::f64::consts::PI * r;
         let hairpin = free_rope(length, path.len() - 1, path);
-        assert!(!cannot_touch_itself(&hairpin, h));
-        let (pairs, _) = rope_pairs(&[(&hairpin, &contact)], h, true);
+        assert!(!cannot_touch_itself(&hairpin, &[], h));
+        let (pairs, _) = rope_pairs(&[(&hairpin, &contact)], &[], h, true);
         assert!(!pairs.is_empty(), "the hairpin's legs touch");
     }
 

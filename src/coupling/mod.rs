@@ -1691,7 +1691,9 @@ fn cable_islands(
         return Vec::new();
     }
     let list: Vec<(&Cable, &CableContact)> = candidates.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
-    let (pairs, mut approach) = contact::rope_pairs(&list, h, false);
+    let accelerations: Vec<&[Vec<DVec3>]> =
+        candidates.iter().filter(|&&i| cables[i].contact.is_some()).map(|&i| cables[i].friction.start_accelerations_of(&cables[i].cable)).collect();
+    let (pairs, mut approach) = contact::rope_pairs(&list, &accelerations, h, false);
     let extents: Vec<contact::CableExtent> = list.iter().map(|(cable, _)| contact::CableExtent::of(cable)).collect();
     // Nodes 0.. are the candidates, then the free bodies.
     let nodes = candidates.len() + free.len();
@@ -1951,7 +1953,8 @@ fn island_passes(
         // that touch), as the pairs' chain indices count them.
         let listed: Vec<usize> = members.iter().copied().filter(|&i| cables[i].contact.is_some()).collect();
         let list: Vec<(&Cable, &CableContact)> = listed.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
-        let mut found = contact::rope_pairs(&list, hp, false).0;
+        let accelerations: Vec<&[Vec<DVec3>]> = listed.iter().map(|&i| cables[i].friction.start_accelerations_of(&cables[i].cable)).collect();
+        let mut found = contact::rope_pairs(&list, &accelerations, hp, false).0;
         let extents: Vec<contact::CableExtent> = list.iter().map(|(cable, _)| contact::CableExtent::of(cable)).collect();
         // The free bodies at the pass's start, as chains of their own.
         // (A body rapier no longer has keeps its state and gets no chain.)

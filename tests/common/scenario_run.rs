@@ -105,3 +105,22 @@ s = {}
         length - 0.05
     )
 }
+
+/// The distance (m) between the segments `p1 q1` and `p2 q2` (world, m):
+/// exact, from their nearest points (clamped to both segments).
+#[allow(dead_code)]
+pub fn segment_distance(p1: glam::DVec3, q1: glam::DVec3, p2: glam::DVec3, q2: glam::DVec3) -> f64 {
+    let (d1, d2, r) = (q1 - p1, q2 - p2, p1 - p2);
+    let (aa, e, f, c, bb) = (d1.dot(d1), d2.dot(d2), d2.dot(r), d1.dot(r), d1.dot(d2));
+    let den = aa * e - bb * bb;
+    let mut s = if den > 1e-15 { ((bb * f - c * e) / den).clamp(0.0, 1.0) } else { 0.0 };
+    let mut t = (bb * s + f) / e;
+    if t < 0.0 {
+        t = 0.0;
+        s = (-c / aa).clamp(0.0, 1.0);
+    } else if t > 1.0 {
+        t = 1.0;
+        s = ((bb - c) / aa).clamp(0.0, 1.0);
+    }
+    ((p1 + d1 * s) - (p2 + d2 * t)).length()
+}
