@@ -1589,11 +1589,11 @@ fn closest_on_segments(p1: DVec3, q1: DVec3, p2: DVec3, q2: DVec3) -> (f64, f64)
 /// [`PairContact`] (see [`rope_pairs`]).
 /// Returns how fast the contacts close (m/s), for the step's passes.
 pub(crate) fn add_self_contacts(cable: &mut Cable, contact: &CableContact, memory: &mut FrictionMemory, h: f64) -> f64 {
-    let accelerations = memory.start_accelerations_of(cable).to_vec();
-    if cannot_touch_itself(cable, &accelerations, h) {
+    let accelerations = memory.start_accelerations_of(cable);
+    if cannot_touch_itself(cable, accelerations, h) {
         return 0.0;
     }
-    let (pairs, approach) = rope_pairs(&[(&*cable, contact)], &[&accelerations], h, true);
+    let (pairs, approach) = rope_pairs(&[(&*cable, contact)], &[accelerations], h, true);
     // Each with its friction, from the same touch at the end of the last
     // step.
     let chain = &cable.model.chain;

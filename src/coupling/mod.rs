@@ -1674,6 +1674,24 @@ fn free_bodies(cables: &[&mut CoupledCable], bodies: &rp::RigidBodySet, contacts
     free
 }
 
+/// [`pair_search_inputs`]'s two aligned lists.
+type PairSearch<'a> = (Vec<(&'a Cable, &'a CableContact)>, Vec<&'a [Vec<DVec3>]>);
+
+/// What [`contact::rope_pairs`] searches between the cables `indices` of
+/// `cables` that have contacts on, in that order: each cable with its
+/// contact settings, and its ropes' start accelerations
+/// ([`contact::FrictionMemory::start_accelerations_of`]), built together so
+/// that the two lists stay aligned.
+fn pair_search_inputs<'a>(cables: &'a [&mut CoupledCable], indices: &[usize]) -> PairSearch<'a> {
+    indices
+        .iter()
+        .filter_map(|&i| {
+            let cc = &*cables[i];
+            Some(((&cc.cable, cc.contact.as_ref()?), cc.friction.start_accelerations_of(&cc.cable)))
+        })
+        .unzip()
+}
+
 /// The islands of this step: the cables with contacts on that have not
 /// failed, joined by the contacts between their ropes and by the free
 /// bodies that touch them (union–find; each island's cables in cable
@@ -1690,9 +1708,7 @@ fn cable_islands(
     if candidates.is_empty() || (candidates.len() < 2 && free.is_empty()) {
         return Vec::new();
     }
-    let list: Vec<(&Cable, &CableContact)> = candidates.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
-    let accelerations: Vec<&[Vec<DVec3>]> =
-        candidates.iter().filter(|&&i| cables[i].contact.is_some()).map(|&i| cables[i].friction.start_accelerations_of(&cables[i].cable)).collect();
+    let (list, accelerations) = pair_search_inputs(cables, &candidates);
     let (pairs, mut approach) = contact::rope_pairs(&list, &accelerations, h, false);
     let extents: Vec<contact::CableExtent> = list.iter().map(|(cable, _)| contact::CableExtent::of(cable)).collect();
     // Nodes 0.. are the candidates, then the free bodies.
@@ -1952,8 +1968,7 @@ fn island_passes(
         // The members with contacts (all of them: an island is made of ropes
         // that touch), as the pairs' chain indices count them.
         let listed: Vec<usize> = members.iter().copied().filter(|&i| cables[i].contact.is_some()).collect();
-        let list: Vec<(&Cable, &CableContact)> = listed.iter().filter_map(|&i| Some((&cables[i].cable, cables[i].contact.as_ref()?))).collect();
-        let accelerations: Vec<&[Vec<DVec3>]> = listed.iter().map(|&i| cables[i].friction.start_accelerations_of(&cables[i].cable)).collect();
+        let (list, accelerations) = pair_search_inputs(cables, &listed);
         let mut found = contact::rope_pairs(&list, &accelerations, hp, false).0;
         let extents: Vec<contact::CableExtent> = list.iter().map(|(cable, _)| contact::CableExtent::of(cable)).collect();
         // The free bodies at the pass's start, as chains of their own.
