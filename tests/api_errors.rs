@@ -87,3 +87,20 @@ fn set_link_velocities_rejects_bad_targets() {
     assert!(err.to_string().contains("cannot make"), "{err}");
     assert_eq!(c.state.v, before);
 }
+
+/// `Cable::set_gravity` refuses a vector that is not finite, by name, and
+/// keeps the gravity it had; a finite one is taken.
+#[test]
+fn set_gravity_rejects_a_vector_that_is_not_finite() {
+    let model = RopeBuilder::new(20.0, 10, section(), 0.02).start(pinned()).build().unwrap();
+    let mut c = Cable::new(model, Scheme::default()).unwrap();
+    let g = c.gravity();
+    for bad in [DVec3::new(f64::NAN, -9.81, 0.0), DVec3::new(0.0, f64::NEG_INFINITY, 0.0)] {
+        let err = c.set_gravity(bad).unwrap_err();
+        println!("{err}");
+        assert!(matches!(err, CableError::Gravity { .. }) && err.to_string().contains("gravity") && err.to_string().contains("not finite"), "{err}");
+        assert_eq!(c.gravity(), g);
+    }
+    c.set_gravity(DVec3::new(0.0, -1.62, 0.0)).unwrap();
+    assert_eq!(c.gravity(), DVec3::new(0.0, -1.62, 0.0));
+}

@@ -2,7 +2,9 @@
 //! schedule the user chooses, the cable step taken from rapier's
 //! `TimestepMode`, the systems placed by hand, and clear refusals of what
 //! the plugin cannot follow (another schedule than rapier's, an
-//! interpolated timestep, a body in another rapier context).
+//! interpolated timestep, a body in another rapier context). And what a
+//! game does to rapier's `RapierConfiguration` at run time: pausing the
+//! physics pauses the cables, a new gravity reaches them.
 
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
@@ -229,4 +231,100 @@ fn coupled_substeps_are_the_finer_fixed_step_bit_for_bit() {
     println!("coupled sub-steps: payload {:?} at t = {}; fine fixed step: {:?} at t = {}", a.0, a.2, b.0, b.2);
     assert!(a.0.x > 0.5, "the payload swung: {:?}", a.0);
     assert_eq!(a, b);
+}
+
+/// A fixed-step app (rapier and the cables in `FixedUpdate`, 1/60 s, one
+/// fixed step per update).
+fn fixed_app() -> App {
+    let mut app = app_with(RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default(), TimeUpdateStrategy::FixedTimesteps(1));
+    app.insert_resource(Time::<Fixed>::from_hz(60.0));
+    app.insert_resource(TimestepMode::Fixed { dt: 1.0 / 60.0, substeps: 1 });
+    ready(app)
+}
+
+/// Edits the default rapier context's `RapierConfiguration`, as a game's
+/// system would.
+fn configure(app: &mut App, edit: impl Fn(&mut RapierConfiguration)) {
+    let mut q = app.world_mut().query_filtered::<&mut RapierConfiguration, With<DefaultRapierContext>>();
+    for mut c in q.iter_mut(app.world_mut()) {
+        edit(&mut c);
+    }
+}
+
+/// The payload's position and velocity, the cable's nodes and its time.
+fn snapshot(app: &App, payload: Entity, cable: Entity) -> (Vec3, Vec3, Vec<Vec3>, f64) {
+    let w = app.world();
+    let state = w.get::<CableState>(cable).expect("built and read out");
+    (w.get::<Transform>(payload).unwrap().translation, w.get::<Velocity>(payload).unwrap().linear, state.nodes.clone(), state.time)
+}
+
+/// A game's pause menu: `RapierConfiguration::physics_pipeline_active =
+/// false`. Rapier then neither steps nor writes its bodies back, and the
+/// cables stop with it: over 20 paused frames the swinging payload (a
+/// carried body of the cable's solve), its velocity, the rope's nodes and
+/// the cable's time stay as they were, bit for bit; resumed, the run goes
+/// on bit for bit as the same run that never paused. (Before 2026-11-29
+/// the cables kept stepping while rapier was paused: the cable's time ran
+/// on by the paused frames.)
+#[test]
+fn pausing_rapier_pauses_the_cables_and_resuming_goes_on_bit_for_bit() {
+    let (mut never, mut paused) = (fixed_app(), fixed_app());
+    let (pn, cn) = spawn_hanging(&mut never, Velocity::linear(Vec3::X));
+    let (pp, cp) = spawn_hanging(&mut paused, Velocity::linear(Vec3::X));
+    for app in [&mut never, &mut paused] {
+        let errs = run(app, 31);
+        assert!(errs.is_empty(), "{errs:?}");
+    }
+    let before = snapshot(&paused, pp, cp);
+    configure(&mut paused, |c| c.physics_pipeline_active = false);
+    let errs = run(&mut paused, 20);
+    assert!(errs.is_empty(), "{errs:?}");
+    let during = snapshot(&paused, pp, cp);
+    println!("paused 20 frames: payload {:?} → {:?}, cable time {} → {}", before.0, during.0, before.3, during.3);
+    assert_eq!(before, during, "something moved while rapier was paused");
+    configure(&mut paused, |c| c.physics_pipeline_active = true);
+    for app in [&mut never, &mut paused] {
+        let errs = run(app, 30);
+        assert!(errs.is_empty(), "{errs:?}");
+    }
+    let (a, b) = (snapshot(&never, pn, cn), snapshot(&paused, pp, cp));
+    println!("after resuming: payload {:?} at t = {} (never paused: {:?} at t = {})", b.0, b.3, a.0, a.3);
+    assert!(a.0.x > 0.5, "the payload swung: {:?}", a.0);
+    assert_eq!(a, b);
+}
+
+/// A low-gravity level: `RapierConfiguration::gravity` changed at run time
+/// reaches the cables at their next step, as it reaches rapier's bodies.
+/// The 100 kg ball on the 10 m rope (a carried body: its weight is in the
+/// cable's solve) hangs at rest; the rope's top carries the weight below
+/// it, `(M + ρ L) g`, averaged over the last 30 frames: first with
+/// rapier's default gravity, then 2 s after the switch to the Moon's
+/// 1.62 m/s², within 1e-3 of each. (Before 2026-11-29 the cables kept the
+/// gravity they were built with: the top still carried 982 N on the Moon.)
+#[test]
+fn a_new_rapier_gravity_reaches_the_cables() {
+    let mut app = fixed_app();
+    let (_, cable) = spawn_hanging(&mut app, ());
+    let top_tension = |app: &mut App, frames: usize| {
+        let mut sum = 0.0;
+        for _ in 0..frames {
+            app.update();
+            assert!(errors(app).is_empty(), "{:?}", errors(app));
+            sum += app.world().get::<CableState>(cable).unwrap().tensions[0] as f64;
+        }
+        sum / frames as f64
+    };
+    let mass = M as f64 + 0.01 * L as f64;
+    let errs = run(&mut app, 2);
+    assert!(errs.is_empty(), "{errs:?}");
+    top_tension(&mut app, 90);
+    let earth = top_tension(&mut app, 30);
+    configure(&mut app, |c| c.gravity = Vec3::new(0.0, -1.62, 0.0));
+    top_tension(&mut app, 90);
+    let moon = top_tension(&mut app, 30);
+    let (g_earth, g_moon) = (9.81f32 as f64, 1.62f32 as f64);
+    println!("top tension {earth:.3} N against (M + ρ L) g = {:.3} N; on the Moon {moon:.3} N against {:.3} N", mass * g_earth, mass * g_moon);
+    assert!((earth / (mass * g_earth) - 1.0).abs() < 1e-3, "{earth}");
+    assert!((moon / (mass * g_moon) - 1.0).abs() < 1e-3, "{moon}");
+    assert_eq!(app.world().get::<CableSim>(cable).unwrap().cable.gravity(), bevy::math::DVec3::new(0.0, -g_moon, 0.0));
 }

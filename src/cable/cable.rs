@@ -101,6 +101,12 @@ pub enum CableError {
         /// The rope's radius, m.
         radius: f64,
     },
+    /// [`Cable::set_gravity`] with a vector that is not finite.
+    #[error("gravity ({}, {}, {}) m/s² is not finite", gravity.x, gravity.y, gravity.z)]
+    Gravity {
+        /// The vector refused, m/s².
+        gravity: DVec3,
+    },
     /// The state left physical sense (non-finite, or an element stretched
     /// or compressed by more than its length).
     #[error("cable diverged at t = {time} s: {reason}")]
@@ -518,6 +524,26 @@ impl Cable {
     pub fn elastic_energy(&self) -> f64 {
         let ch = &self.model.chain;
         ch.elastic_energy(&self.state.q) + ch.force_element_energy(self.state.t)
+    }
+
+    /// Gravity acting on the rope and on the bodies its chain carries,
+    /// m/s² (world).
+    pub fn gravity(&self) -> DVec3 {
+        self.model.chain.gravity
+    }
+
+    /// Changes gravity, m/s² (world), from the next step on: the rope's
+    /// weight, its carried bodies' (each times its gravity scale), the
+    /// bodies its contacts make free bodies of an island with it, and the
+    /// gravitational energy. The state is kept: the change is a step in the
+    /// load, as a force applied at once. A vector that is not finite is
+    /// refused ([`CableError::Gravity`]) and changes nothing.
+    pub fn set_gravity(&mut self, gravity: DVec3) -> Result<(), CableError> {
+        if !gravity.is_finite() {
+            return Err(CableError::Gravity { gravity });
+        }
+        self.model.chain.gravity = gravity;
+        Ok(())
     }
 
     /// Gravitational potential energy (zero at y = 0 for gravity along −y), J.

@@ -27,9 +27,9 @@
 //! |---|---|---|
 //! | `PhysicsSet::SyncBackend` | bevy_rapier | creates rapier bodies, applies user changes (velocity writes, impulses) |
 //! | [`CableSystems::Init`] | after it | builds new cables from [`CableDescriptor`]s |
-//! | [`CableSystems::Step`] | then, before `PhysicsSet::StepSimulation` | the coupling core's phase 1: samples the bodies cable ends hang on, reads the carried bodies, advances every cable by the fixed step (f64, O(n) implicit), hands the carried bodies to rapier, applies end forces to the bodies rapier keeps |
+//! | [`CableSystems::Step`] | then, before `PhysicsSet::StepSimulation` | the coupling core's phase 1: samples the bodies cable ends hang on, reads the carried bodies, advances every cable by the fixed step (f64, O(n) implicit) under rapier's gravity, hands the carried bodies to rapier, applies end forces to the bodies rapier keeps; nothing while rapier is paused (`RapierConfiguration::physics_pipeline_active` false) |
 //! | `PhysicsSet::StepSimulation` | bevy_rapier | rapier steps |
-//! | [`CableSystems::WriteBodies`] | after it, before `PhysicsSet::Writeback` | the core's phase 2: contact impulses on carried bodies, carried bodies put on the cable's pose and velocity, free bodies the ropes touched put on the pose the ropes' solve left them at |
+//! | [`CableSystems::WriteBodies`] | after it, before `PhysicsSet::Writeback` | the core's phase 2: contact impulses on carried bodies, carried bodies put on the cable's pose and velocity, free bodies the ropes touched put on the pose the ropes' solve left them at; nothing while rapier is paused |
 //! | `PhysicsSet::Writeback` | bevy_rapier | `Transform` and `Velocity` from rapier |
 //! | [`CableSystems::Readout`] | after `Writeback` | refreshes [`CableState`] for other systems |
 //!
@@ -315,7 +315,9 @@ pub struct CableSettings {
     /// (`plugin::scenario`) sets its exact `dt`.
     pub step: Option<f64>,
     /// Gravity of the cables, m/s², replacing rapier's (f32)
-    /// `RapierConfiguration::gravity` when set.
+    /// `RapierConfiguration::gravity` when set. Unset, the cables follow
+    /// rapier's gravity, read at every step (a change at run time reaches
+    /// them at their next step).
     pub gravity: Option<bevy::math::DVec3>,
 }
 

@@ -337,8 +337,15 @@ pub(crate) fn step_cables(
     settings: Res<CableSettings>,
     time: Res<Time>,
     mode: Option<Res<TimestepMode>>,
+    config: Query<&RapierConfiguration, With<DefaultRapierContext>>,
     mut errors: MessageWriter<CableError>,
 ) {
+    // Rapier paused (`physics_pipeline_active` false): it does not step,
+    // and neither do the cables (their time, ropes and carried bodies
+    // stay as they are).
+    if paused(&config) {
+        return;
+    }
     let mut list: Vec<(Entity, Mut<CableSim>)> = cables.iter_mut().collect();
     list.sort_by_key(|(e, _)| spawn_order(*e));
     let dt = match (settings.step, rapier_step(mode.as_deref(), &time)) {
@@ -361,9 +368,23 @@ pub(crate) fn step_cables(
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
+    // Gravity as rapier has it now (unless the settings fix it): a change
+    // of `RapierConfiguration::gravity` reaches the ropes and their carried
+    // bodies at this step, as it reaches rapier's bodies.
+    let gravity = settings.gravity.or_else(|| config.iter().next().map(|c| c.gravity.as_dvec3()));
     let mut given: HashMap<RigidBodyHandle, BodyInputs> = HashMap::new();
     for (entity, sim) in &mut list {
         let sim = &mut **sim;
+        if let Some(g) = gravity.filter(|g| *g != sim.coupled.cable.gravity()) {
+            if let Err(e) = sim.coupled.cable.set_gravity(g) {
+                if !sim.coupled.failed {
+                    sim.coupled.failed = true;
+                    let t = sim.coupled.cable.time();
+                    stop(&mut errors, &ropes, CableError::new(*entity, CableErrorKind::InvalidInput, t, format!("rapier's {e}")));
+                }
+                continue;
+            }
+        }
         let mut invalid = None;
         for (be, _) in sim.bodies.iter().filter(|(_, c)| matches!(c, CarriedBody::Lumped(_))) {
             let (Ok((force, scale, damping)), Ok(h)) = (inputs.get(*be), handles.get(*be)) else {
@@ -420,6 +441,13 @@ pub(crate) fn step_cables(
         let kind = if matches!(e, crate::cable::CableError::StartsInside { .. }) { CableErrorKind::Configuration } else { CableErrorKind::Diverged };
         stop(&mut errors, &ropes, CableError::new(list[i].0, kind, t, e.to_string()));
     }
+}
+
+/// Whether rapier's default context is paused
+/// (`RapierConfiguration::physics_pipeline_active` false): bevy_rapier then
+/// neither steps nor writes its bodies back, and the cables do not step.
+fn paused(config: &Query<&RapierConfiguration, With<DefaultRapierContext>>) -> bool {
+    config.iter().next().is_some_and(|c| !c.physics_pipeline_active)
 }
 
 /// Why the cables refuse rapier's `TimestepMode::Interpolated`.
@@ -494,7 +522,15 @@ fn stop(errors: &mut MessageWriter<CableError>, ropes: &Query<(Entity, &CableRop
 /// The core's phase 2, after rapier's step and before its writeback: the
 /// contact impulses rapier gave the carried bodies are kept for the next
 /// step, and the bodies are put on the cable's pose and velocity.
-pub(crate) fn write_bodies(mut cables: Query<(Entity, &mut CableSim)>, mut ctx: WriteRapierContext) {
+pub(crate) fn write_bodies(
+    mut cables: Query<(Entity, &mut CableSim)>,
+    mut ctx: WriteRapierContext,
+    config: Query<&RapierConfiguration, With<DefaultRapierContext>>,
+) {
+    // Nothing stepped while rapier is paused.
+    if paused(&config) {
+        return;
+    }
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
