@@ -148,6 +148,19 @@ fn external_force_and_damping_act_in_the_cable_solve() {
     assert!((measured / (c / 2.0) - 1.0).abs() < 0.02, "{measured}");
 }
 
+/// Runs 3 s (180 frames) and returns the rope's mean top tension over the
+/// last second, N.
+fn mean_top_tension(app: &mut App, cable: Entity) -> f64 {
+    let mut sum = 0.0;
+    for k in 0..180 {
+        app.update();
+        if k >= 120 {
+            sum += app.world().get::<CableSim>(cable).unwrap().cable.tension_at(0.0);
+        }
+    }
+    sum / 60.0
+}
+
 /// `GravityScale` s on the payload: the rope carries s·m g (plus its own
 /// 0.1 kg); mean top tension over the last second of 3 s.
 #[test]
@@ -155,18 +168,37 @@ fn gravity_scale_acts_in_the_cable_solve() {
     for s in [0.5f32, 2.0] {
         let mut app = app();
         let (_, cable) = hang(&mut app, GravityScale(s));
-        let mut sum = 0.0;
-        for k in 0..180 {
-            app.update();
-            if k >= 120 {
-                sum += app.world().get::<CableSim>(cable).unwrap().cable.tension_at(0.0);
-            }
-        }
-        let tension = sum / 60.0;
+        let tension = mean_top_tension(&mut app, cable);
         let reference = (s as f64 * M as f64 + 0.01 * L as f64) * G;
         println!("gravity scale {s}: top tension {tension:.3} N (s m g + μ L g = {reference:.3} N, {:+.2e})", tension / reference - 1.0);
         assert!((tension / reference - 1.0).abs() < 1e-3);
     }
+}
+
+/// A carried body's mass changed at run time (a crate loaded: its
+/// `ColliderMassProperties` replaced, 100 → 400 kg, after 1 s at rest) is
+/// the cable's from the next step: the rope then carries the new weight,
+/// `(m + μ L) g`, mean top tension over the last second of 3 s after the
+/// change (the payload bounces axially at first, as a weight added at once
+/// makes it). (Before 2026-11-29 the link kept the mass it was built with:
+/// the rope went on carrying 100 kg.)
+#[test]
+fn a_carried_bodys_mass_changed_at_run_time_is_the_cables() {
+    let mut app = app();
+    let (payload, cable) = hang(&mut app, ());
+    for _ in 0..60 {
+        app.update();
+    }
+    let before = app.world().get::<CableSim>(cable).unwrap().cable.tension_at(0.0);
+    app.world_mut().entity_mut(payload).insert(ColliderMassProperties::Mass(4.0 * M));
+    let tension = mean_top_tension(&mut app, cable);
+    let reference = (4.0 * M as f64 + 0.01 * L as f64) * G;
+    println!(
+        "top tension {before:.3} N at 100 kg; after the change to 400 kg {tension:.3} N ((m + μ L) g = {reference:.3} N, {:+.2e})",
+        tension / reference - 1.0
+    );
+    assert!((tension / reference - 1.0).abs() < 1e-3, "{tension} vs {reference}");
+    assert!(!app.world().get::<CableSim>(cable).unwrap().failed);
 }
 
 /// A 20 kg ball at 5 m/s (no gravity on it) hits the resting 100 kg

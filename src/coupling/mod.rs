@@ -103,7 +103,7 @@ use crate::cable::rope::FLOATING_BODY_LINK;
 use crate::cable::{
     BaseMotion, BaseState, BodyInChain, Cable, CableError, LinkLoad, LinkVelocity, LumpedBody, RopeBuilder, RopeEnd, RopeError, RopeModel, RopeStart,
 };
-use crate::cable::{Chain, ForestPair, FreeBody};
+use crate::cable::{Chain, ForestPair, FreeBody, LinkMass};
 use crate::integrate::{Scheme, State, StepStats};
 use glam::{DMat3, DQuat, DVec3};
 use rapier3d::prelude as rp;
@@ -313,6 +313,9 @@ pub struct CarriedLink {
     pub com: DVec3,
     /// The link's own damping rates before the body's were added, 1/s.
     link_damping: (f64, f64),
+    /// Rapier's mass properties of the body when the link last took them
+    /// (its f32 `local_mprops`): a change is a mass the user gave it.
+    mprops: rp::MassProperties,
     /// Velocity (centre of mass) and angular velocity the core last left on
     /// the rapier body, exactly as rapier stores them.
     mark: Option<(rp::Vector, rp::Vector)>,
@@ -866,6 +869,38 @@ fn hand_to_cable(rb: &mut rp::RigidBody) {
     }
 }
 
+/// A carried body whose mass properties changed in rapier since its link
+/// took them (the user gave it another mass, centre of mass or inertia: a
+/// crate loaded, `ColliderMassProperties` or `AdditionalMassProperties`
+/// edited, a collider added): its share of its link's mass properties is
+/// replaced by the new ones, from this step on. The link keeps its
+/// velocity (as rapier keeps a body's when its mass changes), and the rope
+/// and the other bodies on the link keep their share.
+fn reweigh(cable: &mut Cable, c: &mut CarriedLink, rb: &rp::RigidBody) {
+    let mprops = rb.mass_properties().local_mprops;
+    if mprops == c.mprops {
+        return;
+    }
+    let lb = lumped_of(rb);
+    // The body's share, in the link frame.
+    let share = |mass: f64, com: DVec3, inertia: DMat3| {
+        let r = c.place.rotation;
+        LinkMass::new(mass, c.place.origin + r * com, r * inertia * r.transpose())
+    };
+    let (old, new) = (share(-c.mass, c.com, -c.inertia), share(lb.mass, lb.com, lb.inertia));
+    let Some(lm) = cable.model.chain.joint_mut_same_layout(c.place.link).and_then(|j| j.link.as_mut()) else {
+        return;
+    };
+    let rest = if lm.mass - c.mass > 1e-12 * lm.mass { Some(lm.combine(&old)) } else { None };
+    let damping = (lm.linear_damping, lm.angular_damping);
+    *lm = match rest {
+        Some(rest) => rest.combine(&new),
+        None => new,
+    };
+    (lm.linear_damping, lm.angular_damping) = damping;
+    (c.mass, c.com, c.inertia, c.mprops) = (lb.mass, lb.com, lb.inertia, mprops);
+}
+
 /// Switches off the motors of a trolley's rail joint in rapier (the cable
 /// solve drives the rail).
 fn mute_motor(joints: &mut rp::ImpulseJointSet, joint: rp::ImpulseJointHandle) {
@@ -1086,6 +1121,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
                 inertia: lb.inertia,
                 com: lb.com,
                 link_damping,
+                mprops: rb.mass_properties().local_mprops,
                 mark: Some((rb.linvel(), rb.angvel())),
                 landing: (DVec3::ZERO, DVec3::ZERO),
                 contact: (DVec3::ZERO, DVec3::ZERO),
@@ -1287,6 +1323,7 @@ pub fn step_cables(
             };
             hand_to_cable(rb);
             let c = &mut cc.carried[k];
+            reweigh(&mut cc.cable, c, rb);
             let (_, r) = pose_of(rb);
             let i_world = r * c.inertia * r.transpose();
             // What the user did to the body since the core left it
