@@ -1,5 +1,6 @@
-//! Warnings the plugin logs at a cable's creation (this file installs its
-//! own logger, so it is its own test binary).
+//! Warnings the plugin logs (this file installs its own logger, so it is
+//! its own test binary): at a cable's creation, and when a carried body is
+//! moved by hand.
 
 #[path = "common/plugin_app.rs"]
 mod plugin_app;
@@ -25,6 +26,15 @@ impl log::Log for Capture {
     fn flush(&self) {}
 }
 
+/// Installs the capturing logger once for the binary's tests.
+fn install_logger() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        log::set_boxed_logger(Box::new(Capture)).unwrap();
+        log::set_max_level(log::LevelFilter::Warn);
+    });
+}
+
 /// A 10 kg body held by a revolute joint (so rapier keeps it) at the start
 /// of 10 m of 20 mm steel rope: the cable couples it explicitly, with
 /// `k h²/m` ≈ 1 000 at 1/60 s. The plugin says so once, at creation, with
@@ -32,8 +42,7 @@ impl log::Log for Capture {
 /// does; a payload the cable carries gets no such warning.
 #[test]
 fn an_explicit_coupling_likely_unstable_is_warned_at_creation() {
-    log::set_boxed_logger(Box::new(Capture)).unwrap();
-    log::set_max_level(log::LevelFilter::Warn);
+    install_logger();
     let mut app = plugin_app::headless_app(1.0 / 60.0);
     let w = app.world_mut();
     let post = w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, 10.0, 0.0))).id();
@@ -68,4 +77,50 @@ fn an_explicit_coupling_likely_unstable_is_warned_at_creation() {
         "{}",
         warned[0]
     );
+}
+
+/// A game "teleports" a crate hanging on a rope by writing its `Transform`.
+/// A carried body's pose is the cable's: the move is undone at the next
+/// step, and the plugin says so once, naming the body, the place and the
+/// way to do it instead. Nothing is logged while nobody moves it (also with
+/// the crate swinging), nor for a second move.
+#[test]
+fn a_carried_body_moved_by_hand_is_warned_once() {
+    install_logger();
+    let mut app = plugin_app::headless_app(1.0 / 60.0);
+    let w = app.world_mut();
+    let hook = w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, 10.0, 0.0))).id();
+    let crate_ = w
+        .spawn((
+            RigidBody::Dynamic,
+            Transform::from_xyz(0.0, 4.5, 0.0),
+            Collider::cuboid(0.5, 0.5, 0.5),
+            ColliderMassProperties::Mass(500.0),
+            Velocity::linear(Vec3::X),
+        ))
+        .id();
+    w.spawn(
+        CableDescriptor::new(5.0)
+            .material(RopeMaterial::steel_6x36_iwrc(0.02))
+            .start(CableAnchor::body(hook, Vec3::ZERO))
+            .end(CableAnchor::body(crate_, Vec3::Y * 0.5)),
+    );
+    let moved = || LOGGED.lock().unwrap().iter().filter(|l| l.contains("was moved")).cloned().collect::<Vec<String>>();
+    for _ in 0..60 {
+        app.update();
+    }
+    assert!(moved().is_empty(), "{:?}", moved());
+    let x = |app: &App| app.world().get::<Transform>(crate_).unwrap().translation.x;
+    let before = x(&app);
+    for _ in 0..2 {
+        app.world_mut().get_mut::<Transform>(crate_).unwrap().translation.x += 1.0;
+        for _ in 0..3 {
+            app.update();
+        }
+    }
+    let logged = moved();
+    println!("{logged:#?}; crate at x = {} (before the moves {before})", x(&app));
+    assert_eq!(logged.len(), 1, "{logged:?}");
+    assert!(logged[0].starts_with("WARN") && logged[0].contains(&format!("{crate_}")) && logged[0].contains("the move is undone"), "{}", logged[0]);
+    assert!((x(&app) - before).abs() < 0.2, "the crate stayed on its rope: {} vs {before}", x(&app));
 }

@@ -319,6 +319,10 @@ pub struct CarriedLink {
     /// Velocity (centre of mass) and angular velocity the core last left on
     /// the rapier body, exactly as rapier stores them.
     mark: Option<(rp::Vector, rp::Vector)>,
+    /// Where the core last put the rapier body (its origin, exactly as
+    /// rapier stores it), after rapier's step: elsewhere at the next step,
+    /// the user moved it.
+    pub(crate) left_at: Option<rp::Vector>,
     /// Velocity handed to rapier for its step (lands on the cable's pose).
     landing: (DVec3, DVec3),
     /// Impulse (N·s at the centre of mass) and angular impulse (N·m·s) that
@@ -1123,6 +1127,7 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
                 link_damping,
                 mprops: rb.mass_properties().local_mprops,
                 mark: Some((rb.linvel(), rb.angvel())),
+                left_at: None,
                 landing: (DVec3::ZERO, DVec3::ZERO),
                 contact: (DVec3::ZERO, DVec3::ZERO),
                 touching: false,
@@ -2200,6 +2205,7 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
             rb.set_linvel(v.as_vec3(), true);
             rb.set_angvel(w.as_vec3(), true);
             c.mark = Some((rb.linvel(), rb.angvel()));
+            c.left_at = Some(rb.translation());
         }
     }
 }

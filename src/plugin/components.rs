@@ -446,6 +446,10 @@ pub struct CableSim {
     /// holds the rapier `ImpulseJoint` whose motor drives it.
     #[reflect(ignore)]
     pub(crate) rail: Option<Entity>,
+    /// Whether the plugin has warned that a carried body's `Transform` was
+    /// written (once per cable).
+    #[reflect(ignore)]
+    pub(crate) warned_moved: bool,
 }
 
 impl std::ops::Deref for CableSim {

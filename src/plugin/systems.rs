@@ -288,7 +288,7 @@ pub(crate) fn init_cables(
                 },
             ));
         }
-        commands.entity(*entity).insert((CableSim { coupled: cc, bodies: carried, rail }, CableState::default()));
+        commands.entity(*entity).insert((CableSim { coupled: cc, bodies: carried, rail, warned_moved: false }, CableState::default()));
     }
 }
 
@@ -390,6 +390,17 @@ pub(crate) fn step_cables(
             let (Ok((force, scale, damping)), Ok(h)) = (inputs.get(*be), handles.get(*be)) else {
                 continue;
             };
+            if !sim.warned_moved {
+                if let Some((off, at)) = moved_from_rope(&sim.coupled, &ctx.rigidbody_set.bodies, h.0) {
+                    sim.warned_moved = true;
+                    log::warn!(
+                        "cable {entity}: its carried body {be} was moved (its `Transform` written) to ({:.3}, {:.3}, {:.3}), {off:.3} m from where the rope holds it; a carried body's pose is the cable's, so the move is undone (move the rope's other end instead, or despawn the cable, move the body and spawn a new cable)",
+                        at.x,
+                        at.y,
+                        at.z
+                    );
+                }
+            }
             let input = BodyInputs {
                 force: force.map_or(DVec3::ZERO, |f| f.force.as_dvec3()),
                 torque: force.map_or(DVec3::ZERO, |f| f.torque.as_dvec3()),
@@ -441,6 +452,16 @@ pub(crate) fn step_cables(
         let kind = if matches!(e, crate::cable::CableError::StartsInside { .. }) { CableErrorKind::Configuration } else { CableErrorKind::Diverged };
         stop(&mut errors, &ropes, CableError::new(list[i].0, kind, t, e.to_string()));
     }
+}
+
+/// How far (m) body `body` is from where the core left it after rapier's
+/// last step (on its cable's pose), and where it is (m, world), when that
+/// is more than 1 mm: the user wrote its `Transform` since.
+fn moved_from_rope(cc: &CoupledCable, bodies: &bevy_rapier3d::rapier::dynamics::RigidBodySet, body: RigidBodyHandle) -> Option<(f64, DVec3)> {
+    let left = cc.carried.iter().find(|c| c.body == body)?.left_at?.as_dvec3();
+    let at = bodies.get(body)?.translation().as_dvec3();
+    let off = at.distance(left);
+    (off > 1e-3).then_some((off, at))
 }
 
 /// Whether rapier's default context is paused
