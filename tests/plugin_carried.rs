@@ -294,11 +294,7 @@ fn a_non_finite_input_on_a_carried_body_is_named_and_stops_the_cable() {
                 app.world_mut().entity_mut(payload).insert(ExternalImpulse { impulse: Vec3::new(0.0, 0.0, f32::NAN), torque_impulse: Vec3::ZERO });
             }
         }
-        let mut errors: Vec<CableError> = Vec::new();
-        for _ in 0..3 {
-            app.update();
-            errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
-        }
+        let errors = errors_over(&mut app, 3);
         println!("{how}: {}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(" | "));
         assert_eq!(errors.len(), 1, "{how}: one error, once: {errors:?}");
         let e = &errors[0];
@@ -308,6 +304,56 @@ fn a_non_finite_input_on_a_carried_body_is_named_and_stops_the_cable() {
         assert!(sim.failed, "{how}: the cable stopped");
         assert_eq!(sim.cable.time(), t_before, "{how}: no step was taken with the bad input");
         assert!(sim.cable.state.is_finite(), "{how}: the cable's state stayed finite");
+    }
+}
+
+/// Runs `frames` updates and returns the `CableError`s sent.
+fn errors_over(app: &mut App, frames: usize) -> Vec<CableError> {
+    let mut errors = Vec::new();
+    for _ in 0..frames {
+        app.update();
+        errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
+    }
+    errors
+}
+
+/// A carried body the user makes fixed or kinematic, disables, or takes
+/// every collider (so all mass) from, cannot stay in the cable's solve: the
+/// cable stops before its next step with one [`CableErrorKind::Configuration`]
+/// error that names the body, what was done and what to do instead. (Before
+/// 2026-11-29 a crate made `Fixed` or kinematic swung on in the cable's
+/// solve, a disabled one stood still while its rope's end swung on, and one
+/// whose collider was removed stopped the cable with "singular effective
+/// matrix … (pivot NaN)".)
+#[test]
+fn a_carried_body_made_fixed_kinematic_disabled_or_massless_stops_its_cable_by_name() {
+    let cases: [(&str, &str); 4] = [
+        ("fixed", "was made `RigidBody::Fixed`"),
+        ("kinematic", "was made `RigidBody::KinematicPositionBased`"),
+        ("disabled", "was disabled"),
+        ("no collider", "has no mass left"),
+    ];
+    for (how, named) in cases {
+        let mut app = app();
+        let (payload, cable) = hang(&mut app, ());
+        for _ in 0..30 {
+            app.update();
+        }
+        let mut body = app.world_mut().entity_mut(payload);
+        match how {
+            "fixed" => body.insert(RigidBody::Fixed),
+            "kinematic" => body.insert(RigidBody::KinematicPositionBased),
+            "disabled" => body.insert(RigidBodyDisabled),
+            _ => body.remove::<Collider>(),
+        };
+        let errors = errors_over(&mut app, 3);
+        println!("{how}: {}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(" | "));
+        assert_eq!(errors.len(), 1, "{how}: one error, once: {errors:?}");
+        let e = &errors[0];
+        assert_eq!((e.entity, e.kind), (cable, CableErrorKind::Configuration), "{how}: {e}");
+        assert!(e.message.contains(named) && e.message.contains(&format!("{payload}")) && e.message.contains("spawn a new one"), "{how}: {e}");
+        let sim = app.world().get::<CableSim>(cable).unwrap();
+        assert!(sim.failed && sim.cable.state.is_finite(), "{how}: the cable stopped, its state finite");
     }
 }
 

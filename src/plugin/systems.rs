@@ -321,7 +321,8 @@ fn refusal(e: &CouplingError, entity_of: &HashMap<RigidBodyHandle, Entity>, batc
 }
 
 /// What the user asks of a carried body through bevy_rapier's components.
-type InputComponents = (Option<&'static ExternalForce>, Option<&'static GravityScale>, Option<&'static Damping>);
+type InputComponents =
+    (Option<&'static ExternalForce>, Option<&'static GravityScale>, Option<&'static Damping>, Option<&'static RigidBody>, Has<RigidBodyDisabled>);
 
 /// Advances every cable by the fixed step (the core's phase 1: before
 /// rapier's step).
@@ -386,10 +387,12 @@ pub(crate) fn step_cables(
             }
         }
         let mut invalid = None;
+        let mut unfit = None;
         for (be, _) in sim.bodies.iter().filter(|(_, c)| matches!(c, CarriedBody::Lumped(_))) {
-            let (Ok((force, scale, damping)), Ok(h)) = (inputs.get(*be), handles.get(*be)) else {
+            let (Ok((force, scale, damping, kind, disabled)), Ok(h)) = (inputs.get(*be), handles.get(*be)) else {
                 continue;
             };
+            unfit = unfit.or_else(|| not_carriable(*be, kind, disabled, ctx.rigidbody_set.bodies.get(h.0)));
             if !sim.warned_moved {
                 if let Some((off, at)) = moved_from_rope(&sim.coupled, &ctx.rigidbody_set.bodies, h.0) {
                     sim.warned_moved = true;
@@ -415,6 +418,12 @@ pub(crate) fn step_cables(
             given.insert(h.0, input);
         }
         if !sim.coupled.failed {
+            if let Some(message) = unfit {
+                sim.coupled.failed = true;
+                let t = sim.coupled.cable.time();
+                stop(&mut errors, &ropes, CableError::new(*entity, CableErrorKind::Configuration, t, message));
+                continue;
+            }
             if let Some(message) = invalid {
                 sim.coupled.failed = true;
                 let t = sim.coupled.cable.time();
@@ -528,6 +537,20 @@ fn invalid_input(body: Entity, input: &BodyInputs, velocity: Option<(Vec3, Vec3)
         ));
     }
     None
+}
+
+/// Why carried body `body` cannot stay in its cable's solve: the user made
+/// it fixed or kinematic (`kind`), disabled it, or took its mass away (its
+/// colliders removed); `rb` is its rapier body.
+fn not_carriable(body: Entity, kind: Option<&RigidBody>, disabled: bool, rb: Option<&bevy_rapier3d::rapier::dynamics::RigidBody>) -> Option<String> {
+    const FIX: &str = "a body the cable carries moves in the cable's solve and must stay a dynamic, enabled rapier body with mass; the cable is stopped (despawn it, and spawn a new one to hang a rope on the body as it is now)";
+    let why = match (kind, disabled, rb.map(|rb| rb.mass())) {
+        (Some(k), _, _) if *k != RigidBody::Dynamic => format!("was made `RigidBody::{k:?}`"),
+        (_, true, _) => "was disabled (`RigidBodyDisabled`)".to_string(),
+        (_, _, Some(m)) if m.is_nan() || m <= 0.0 => format!("has no mass left ({m} kg: its colliders removed, or zero mass properties)"),
+        _ => return None,
+    };
+    Some(format!("carried body {body} {why}: {FIX}"))
 }
 
 /// Stops a cable: its [`CableError`], logged, and the same for every rope
