@@ -1,8 +1,10 @@
 //! Despawning in a Bevy app (issue 11 "Lifecycle", and the guide's
 //! newcomer failure): a cable whose carried body is despawned is removed
-//! (it cannot hold a phantom load); a despawned cable gives its bodies back
-//! to rapier as their components say; a despawned sling leg releases its
-//! island. Nothing panics.
+//! (it cannot hold a phantom load), and so is one whose end's body (a hook)
+//! is despawned, its payload falling free; a despawned cable gives its
+//! bodies back to rapier as their components say; a despawned sling leg
+//! releases its island; a hook made dynamic is refused by name. Nothing
+//! panics.
 
 #[path = "common/plugin_app.rs"]
 mod plugin_app;
@@ -67,6 +69,58 @@ fn a_despawned_cable_gives_its_payload_back_to_rapier_with_its_gravity_scale() {
         println!("gravity scale {scale}: velocity after 0.5 s of free fall {v} (expected y {expected})");
         assert!((v.y - expected).abs() < 1e-3 * expected.abs() && v.x.abs() < 1e-4, "scale {scale}: {v} against {expected}");
     }
+}
+
+/// The payload hanging from a kinematic hook instead of a world point:
+/// (app, hook, payload, cable), run for 0.5 s.
+fn on_hook() -> (App, Entity, Entity, Entity) {
+    let mut app = plugin_app::headless_app(DT);
+    let w = app.world_mut();
+    let hook = w.spawn((RigidBody::KinematicPositionBased, Transform::from_xyz(0.0, 0.0, 0.0), Collider::ball(0.05))).id();
+    let payload =
+        w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -5.2, 0.0), Collider::ball(0.2), ColliderMassProperties::Mass(200.0), Velocity::default())).id();
+    let cable = w.spawn(rope(CableAnchor::body(hook, Vec3::ZERO), CableAnchor::Body { entity: payload, anchor: Vec3::Y * 0.2, clamp: false })).id();
+    run(&mut app, 30);
+    assert!(app.world().get::<CableState>(cable).unwrap().tensions[0] > 1900.0, "the rope holds the payload");
+    (app, hook, payload, cable)
+}
+
+/// Despawning the hook a cable hangs from removes the cable, as rapier
+/// drops a joint whose body is despawned: the payload is a rapier body
+/// again and falls free (exactly `n h g` on its velocity after n steps).
+/// (Before 2026-11-29 the rope went on hanging from where the hook had
+/// been, holding the payload in the air.)
+#[test]
+fn a_cable_whose_hook_is_despawned_is_removed_and_its_payload_falls() {
+    let (mut app, hook, payload, cable) = on_hook();
+    let v0 = app.world().get::<Velocity>(payload).unwrap().linear;
+    app.world_mut().despawn(hook);
+    run(&mut app, 30);
+    assert!(app.world().get::<CableSim>(cable).is_none() && app.world().get::<CableDescriptor>(cable).is_none(), "the cable was not removed");
+    let v = app.world().get::<Velocity>(payload).unwrap().linear;
+    let expected = v0.y - G * 30.0 * DT;
+    println!("the payload's velocity 0.5 s after the hook was despawned: {v} (free fall: y {expected})");
+    assert!((v.y - expected).abs() < 1e-3 * expected.abs() && v.x.abs() < 1e-4, "{v} against {expected}");
+}
+
+/// A hook made dynamic while a cable hangs from it: the cable follows a
+/// fixed or kinematic body without pulling it, so it stops before its next
+/// step with one `Configuration` error naming the hook. (Before
+/// 2026-11-29 it went on following the hook as it fell.)
+#[test]
+fn a_hook_made_dynamic_stops_its_cable_by_name() {
+    let (mut app, hook, _, cable) = on_hook();
+    app.world_mut().entity_mut(hook).insert((RigidBody::Dynamic, ColliderMassProperties::Mass(50.0)));
+    let mut errors = Vec::new();
+    for _ in 0..3 {
+        app.update();
+        errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
+    }
+    println!("{errors:?}");
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert_eq!((errors[0].entity, errors[0].kind), (cable, CableErrorKind::Configuration));
+    assert!(errors[0].message.contains(&format!("{hook}")) && errors[0].message.contains("was made `RigidBody::Dynamic`"), "{}", errors[0]);
+    assert!(app.world().get::<CableSim>(cable).unwrap().failed);
 }
 
 /// A payload hanging on two legs from (±3, 0, 0): (app, payload, leg a,

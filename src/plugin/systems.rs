@@ -387,7 +387,15 @@ pub(crate) fn step_cables(
             }
         }
         let mut invalid = None;
-        let mut unfit = None;
+        // A body that moves a cable end (fixed or kinematic when the cable
+        // was built) made dynamic: the cable would follow it without
+        // pulling it.
+        let mut unfit = sim.bodies.iter().filter(|(_, c)| matches!(c, CarriedBody::Base)).find_map(|(be, _)| match inputs.get(*be) {
+            Ok((_, _, _, Some(RigidBody::Dynamic), _)) => Some(format!(
+                "body {be}, which moves one of its ends, was made `RigidBody::Dynamic`: the cable follows a fixed or kinematic body without pulling it, so it cannot hold this one; the cable is stopped (despawn it, and spawn a new one to couple the rope to the body as it is now)"
+            )),
+            _ => None,
+        });
         for (be, _) in sim.bodies.iter().filter(|(_, c)| matches!(c, CarriedBody::Lumped(_))) {
             let (Ok((force, scale, damping, kind, disabled)), Ok(h)) = (inputs.get(*be), handles.get(*be)) else {
                 continue;
@@ -691,10 +699,12 @@ pub(crate) fn release_cable(
     log::info!("cable {cable} removed: bodies {released:?} are rapier bodies again, sling legs {grafted:?} released");
 }
 
-/// Cables whose carried body was despawned, or one of whose sling legs
-/// was: the cable is removed ([`CableSim`] and its descriptor, so that it is
-/// not rebuilt; [`release_cable`] frees the rest), with a warning. A cable
-/// cannot hold a phantom load.
+/// Cables whose carried body was despawned, or a body that holds one of
+/// their ends (a hook, a post: as rapier drops a joint whose body is
+/// despawned), or one of whose sling legs was: the cable is removed
+/// ([`CableSim`] and its descriptor, so that it is not rebuilt;
+/// [`release_cable`] frees the rest), with a warning. A cable cannot hold a
+/// phantom load, nor hang from a body that is gone.
 pub(crate) fn drop_orphans(
     mut commands: Commands,
     cables: Query<(Entity, &CableSim)>,
@@ -704,8 +714,15 @@ pub(crate) fn drop_orphans(
     mut legs: ResMut<Legs>,
 ) {
     for (cable, sim) in &cables {
-        if let Some((gone, _)) = sim.bodies.iter().find(|(b, kind)| matches!(kind, CarriedBody::Lumped(_)) && exists.get(*b).is_err()) {
-            log::warn!("cable {cable}: its carried body {gone} was despawned; the cable is removed (despawn or respawn the cable entity yourself to keep a rope there)");
+        if let Some((gone, kind)) = sim.bodies.iter().find(|(b, _)| exists.get(*b).is_err()) {
+            if matches!(kind, CarriedBody::Lumped(_)) {
+                log::warn!("cable {cable}: its carried body {gone} was despawned; the cable is removed (despawn or respawn the cable entity yourself to keep a rope there)");
+            } else {
+                // As rapier drops a joint whose body is despawned.
+                log::warn!(
+                    "cable {cable}: body {gone}, which held one of its ends, was despawned; the cable is removed and the bodies it carried are rapier bodies again (despawn or respawn the cable entity yourself to keep a rope there)"
+                );
+            }
             commands.entity(cable).remove::<(CableSim, CableDescriptor, CableState)>();
         }
     }
