@@ -140,6 +140,39 @@ fn sling() -> (App, Entity, Entity, Entity) {
     (app, payload, a, b)
 }
 
+/// A sling leg hanging from a kinematic hook whose hook is despawned: the
+/// island goes as when the leg itself is despawned (both legs released,
+/// neither rebuilt), and the payload falls free. (Before 2026-11-29 the
+/// leg hung on from where its hook had been.)
+#[test]
+fn a_sling_legs_hook_despawned_releases_its_island() {
+    let mut app = plugin_app::headless_app(DT);
+    let w = app.world_mut();
+    let payload =
+        w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, -4.0, 0.0), Collider::ball(0.2), ColliderMassProperties::Mass(200.0), Velocity::default())).id();
+    let hook = w.spawn((RigidBody::KinematicPositionBased, Transform::from_xyz(3.0, 0.0, 0.0), Collider::ball(0.05))).id();
+    let to_payload = CableAnchor::Body { entity: payload, anchor: Vec3::ZERO, clamp: false };
+    let a = w.spawn(rope(CableAnchor::World { point: Vec3::new(-3.0, 0.0, 0.0), clamp: false }, to_payload.clone())).id();
+    let b = w.spawn(rope(CableAnchor::body(hook, Vec3::ZERO), to_payload)).id();
+    run(&mut app, 30);
+    assert!(app.world().get::<CableSim>(a).is_some() && app.world().get::<CableRopeOf>(b).is_some(), "one island: a carries, b is grafted");
+    app.world_mut().despawn(hook);
+    let errors = {
+        run(&mut app, 30);
+        plugin_app::cable_errors(&mut app)
+    };
+    let w = app.world();
+    for leg in [a, b] {
+        assert!(
+            w.get::<CableSim>(leg).is_none() && w.get::<CableRopeOf>(leg).is_none() && w.get::<CableDescriptor>(leg).is_none(),
+            "leg {leg} was not released"
+        );
+    }
+    assert!(errors.is_empty(), "{errors:?}");
+    let v = w.get::<Velocity>(payload).unwrap().linear;
+    assert!(v.y < -0.9 * G * 29.0 * DT, "the payload does not fall freely: {v}");
+}
+
 #[test]
 fn a_despawned_sling_leg_releases_its_island() {
     // Despawning the grafted leg releases the carrying one, and the other

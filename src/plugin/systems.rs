@@ -712,6 +712,7 @@ pub(crate) fn drop_orphans(
     mut removed_legs: RemovedComponents<CableRopeOf>,
     entities: Query<Entity>,
     mut legs: ResMut<Legs>,
+    grafted: Query<(Entity, &CableRopeOf, &CableDescriptor)>,
 ) {
     for (cable, sim) in &cables {
         if let Some((gone, kind)) = sim.bodies.iter().find(|(b, _)| exists.get(*b).is_err()) {
@@ -724,6 +725,20 @@ pub(crate) fn drop_orphans(
                 );
             }
             commands.entity(cable).remove::<(CableSim, CableDescriptor, CableState)>();
+        }
+    }
+    // A sling leg's own end body (its hook) despawned: its island goes, as
+    // when the leg itself is despawned; the leg's descriptor too (it
+    // could not be built again without the body).
+    for (leg, of, d) in &grafted {
+        let gone = [&d.start, &d.end].into_iter().find_map(|a| match a {
+            CableAnchor::Body { entity, .. } if exists.get(*entity).is_err() => Some(*entity),
+            _ => None,
+        });
+        if let (Some(gone), true) = (gone, cables.contains(of.cable)) {
+            log::warn!("sling leg {leg}: body {gone}, which held one of its ends, was despawned; its island (cable {}) is removed and the bodies it carried are released", of.cable);
+            commands.entity(of.cable).remove::<(CableSim, CableDescriptor, CableState)>();
+            commands.entity(leg).remove::<CableDescriptor>();
         }
     }
     for leg in removed_legs.read() {
