@@ -137,11 +137,7 @@ fn a_later_rope_on_a_carried_body_names_the_carrying_cable() {
         app.update();
     }
     let second = app.world_mut().spawn(CableDescriptor::new(5.0).start(CableAnchor::world(Vec3::X * 3.0)).end(CableAnchor::body(payload, Vec3::Y * 0.3))).id();
-    let mut errors = Vec::new();
-    for _ in 0..2 {
-        app.update();
-        errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
-    }
+    let errors = plugin_app::errors_over(&mut app, 2);
     println!("{}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"));
     assert_eq!(errors.len(), 1, "{errors:?}");
     assert_eq!((errors[0].entity, errors[0].kind), (second, CableErrorKind::Configuration));

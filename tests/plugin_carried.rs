@@ -294,7 +294,7 @@ fn a_non_finite_input_on_a_carried_body_is_named_and_stops_the_cable() {
                 app.world_mut().entity_mut(payload).insert(ExternalImpulse { impulse: Vec3::new(0.0, 0.0, f32::NAN), torque_impulse: Vec3::ZERO });
             }
         }
-        let errors = errors_over(&mut app, 3);
+        let errors = plugin_app::errors_over(&mut app, 3);
         println!("{how}: {}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(" | "));
         assert_eq!(errors.len(), 1, "{how}: one error, once: {errors:?}");
         let e = &errors[0];
@@ -305,16 +305,6 @@ fn a_non_finite_input_on_a_carried_body_is_named_and_stops_the_cable() {
         assert_eq!(sim.cable.time(), t_before, "{how}: no step was taken with the bad input");
         assert!(sim.cable.state.is_finite(), "{how}: the cable's state stayed finite");
     }
-}
-
-/// Runs `frames` updates and returns the `CableError`s sent.
-fn errors_over(app: &mut App, frames: usize) -> Vec<CableError> {
-    let mut errors = Vec::new();
-    for _ in 0..frames {
-        app.update();
-        errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
-    }
-    errors
 }
 
 /// A carried body the user makes fixed or kinematic, disables, or takes
@@ -346,7 +336,7 @@ fn a_carried_body_made_fixed_kinematic_disabled_or_massless_stops_its_cable_by_n
             "disabled" => body.insert(RigidBodyDisabled),
             _ => body.remove::<Collider>(),
         };
-        let errors = errors_over(&mut app, 3);
+        let errors = plugin_app::errors_over(&mut app, 3);
         println!("{how}: {}", errors.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(" | "));
         assert_eq!(errors.len(), 1, "{how}: one error, once: {errors:?}");
         let e = &errors[0];

@@ -111,11 +111,7 @@ fn a_cable_whose_hook_is_despawned_is_removed_and_its_payload_falls() {
 fn a_hook_made_dynamic_stops_its_cable_by_name() {
     let (mut app, hook, _, cable) = on_hook();
     app.world_mut().entity_mut(hook).insert((RigidBody::Dynamic, ColliderMassProperties::Mass(50.0)));
-    let mut errors = Vec::new();
-    for _ in 0..3 {
-        app.update();
-        errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
-    }
+    let errors = plugin_app::errors_over(&mut app, 3);
     println!("{errors:?}");
     assert_eq!(errors.len(), 1, "{errors:?}");
     assert_eq!((errors[0].entity, errors[0].kind), (cable, CableErrorKind::Configuration));

@@ -6,6 +6,8 @@
 //! game does to rapier's `RapierConfiguration` at run time: pausing the
 //! physics pauses the cables, a new gravity reaches them.
 
+#[path = "common/plugin_app.rs"]
+mod plugin_app;
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_rapier3d::prelude::*;
@@ -48,7 +50,7 @@ fn spawn_hanging(app: &mut App, extra: impl Bundle) -> (Entity, Entity) {
 /// cable's nodes and time.
 fn swing(mut app: App, frames: usize) -> (Vec3, Vec<Vec3>, f64) {
     let (payload, cable) = spawn_hanging(&mut app, Velocity::linear(Vec3::X));
-    let errs = run(&mut app, frames);
+    let errs = plugin_app::errors_over(&mut app, frames);
     assert!(errs.is_empty(), "{errs:?}");
     let state = app.world().get::<CableState>(cable).expect("built and read out").clone();
     (app.world().get::<Transform>(payload).unwrap().translation, state.nodes, state.time)
@@ -56,16 +58,6 @@ fn swing(mut app: App, frames: usize) -> (Vec3, Vec<Vec3>, f64) {
 
 fn errors(app: &App) -> Vec<CableError> {
     app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned().collect()
-}
-
-/// Runs `frames` updates and collects the errors sent.
-fn run(app: &mut App, frames: usize) -> Vec<CableError> {
-    let mut all = Vec::new();
-    for _ in 0..frames {
-        app.update();
-        all.extend(errors(app));
-    }
-    all
 }
 
 /// The payload settles (rope damped by its own waves is not needed: it
@@ -95,7 +87,7 @@ fn cables_in_post_update_follow_rapier_variable_timestep() {
         TimeUpdateStrategy::ManualDuration(frame),
     ));
     let (payload, cable) = spawn_hanging(&mut app, ());
-    let errs = run(&mut app, 2);
+    let errs = plugin_app::errors_over(&mut app, 2);
     assert!(errs.is_empty(), "{errs:?}");
     let t0 = app.world().get::<CableSim>(cable).expect("cable built in PostUpdate").cable.time();
     let frames = 200;
@@ -124,10 +116,10 @@ fn the_cable_step_is_rapier_fixed_dt_not_the_schedule_delta() {
     let mut app = ready(app);
     assert_eq!(app.world().resource::<Time<Fixed>>().timestep(), Duration::from_micros(15625), "Bevy's default 64 Hz");
     let (_, cable) = spawn_hanging(&mut app, ());
-    let errs = run(&mut app, 3);
+    let errs = plugin_app::errors_over(&mut app, 3);
     assert!(errs.is_empty(), "{errs:?}");
     let t0 = app.world().get::<CableSim>(cable).unwrap().cable.time();
-    run(&mut app, 64);
+    plugin_app::errors_over(&mut app, 64);
     let elapsed = app.world().get::<CableSim>(cable).unwrap().cable.time() - t0;
     println!("64 fixed steps: cable advanced {elapsed} s (rapier: 64 × {dt} s)");
     assert!((elapsed - 64.0 * dt as f64).abs() < 1e-9, "{elapsed}");
@@ -142,7 +134,7 @@ fn an_interpolated_timestep_is_refused_by_name() {
     app.insert_resource(TimestepMode::Interpolated { dt: 1.0 / 64.0, time_scale: 1.0, substeps: 1 });
     let mut app = ready(app);
     let (_, cable) = spawn_hanging(&mut app, ());
-    let errs = run(&mut app, 3);
+    let errs = plugin_app::errors_over(&mut app, 3);
     println!("{}", errs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"));
     assert_eq!(errs.len(), 1, "{errs:?}");
     assert_eq!((errs[0].entity, errs[0].kind), (cable, CableErrorKind::Configuration));
@@ -157,7 +149,7 @@ fn an_interpolated_timestep_is_refused_by_name() {
 fn cables_outside_rapier_schedule_are_refused_with_the_fix() {
     let mut app = ready(app_with(RapierPhysicsPlugin::<NoUserData>::default(), CablePlugin::default(), TimeUpdateStrategy::FixedTimesteps(1)));
     let (_, cable) = spawn_hanging(&mut app, ());
-    let errs = run(&mut app, 3);
+    let errs = plugin_app::errors_over(&mut app, 3);
     println!("{}", errs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"));
     assert_eq!(errs.len(), 1, "{errs:?}");
     assert_eq!((errs[0].entity, errs[0].kind), (cable, CableErrorKind::Configuration));
@@ -175,7 +167,7 @@ fn a_body_in_another_rapier_context_is_refused_by_name() {
     app.update();
     let other = app.world_mut().spawn(RapierContextSimulation::default()).id();
     let (payload, cable) = spawn_hanging(&mut app, RapierContextEntityLink(other));
-    let errs = run(&mut app, 3);
+    let errs = plugin_app::errors_over(&mut app, 3);
     println!("{}", errs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"));
     assert_eq!(errs.len(), 1, "{errs:?}");
     assert_eq!((errs[0].entity, errs[0].kind), (cable, CableErrorKind::Configuration));
@@ -272,19 +264,19 @@ fn pausing_rapier_pauses_the_cables_and_resuming_goes_on_bit_for_bit() {
     let (pn, cn) = spawn_hanging(&mut never, Velocity::linear(Vec3::X));
     let (pp, cp) = spawn_hanging(&mut paused, Velocity::linear(Vec3::X));
     for app in [&mut never, &mut paused] {
-        let errs = run(app, 31);
+        let errs = plugin_app::errors_over(app, 31);
         assert!(errs.is_empty(), "{errs:?}");
     }
     let before = snapshot(&paused, pp, cp);
     configure(&mut paused, |c| c.physics_pipeline_active = false);
-    let errs = run(&mut paused, 20);
+    let errs = plugin_app::errors_over(&mut paused, 20);
     assert!(errs.is_empty(), "{errs:?}");
     let during = snapshot(&paused, pp, cp);
     println!("paused 20 frames: payload {:?} → {:?}, cable time {} → {}", before.0, during.0, before.3, during.3);
     assert_eq!(before, during, "something moved while rapier was paused");
     configure(&mut paused, |c| c.physics_pipeline_active = true);
     for app in [&mut never, &mut paused] {
-        let errs = run(app, 30);
+        let errs = plugin_app::errors_over(app, 30);
         assert!(errs.is_empty(), "{errs:?}");
     }
     let (a, b) = (snapshot(&never, pn, cn), snapshot(&paused, pp, cp));
@@ -315,7 +307,7 @@ fn a_new_rapier_gravity_reaches_the_cables() {
         sum / frames as f64
     };
     let mass = M as f64 + 0.01 * L as f64;
-    let errs = run(&mut app, 2);
+    let errs = plugin_app::errors_over(&mut app, 2);
     assert!(errs.is_empty(), "{errs:?}");
     top_tension(&mut app, 90);
     let earth = top_tension(&mut app, 30);

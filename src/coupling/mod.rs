@@ -891,6 +891,9 @@ fn reweigh(cable: &mut Cable, c: &mut CarriedLink, rb: &rp::RigidBody) {
         let r = c.place.rotation;
         LinkMass::new(mass, c.place.origin + r * com, r * inertia * r.transpose())
     };
+    // The old share negated: combined with the link's, it takes the old
+    // share out again (mass, first and second moments add, so this is
+    // exact up to rounding).
     let (old, new) = (share(-c.mass, c.com, -c.inertia), share(lb.mass, lb.com, lb.inertia));
     let Some(lm) = cable.model.chain.joint_mut_same_layout(c.place.link).and_then(|j| j.link.as_mut()) else {
         return;

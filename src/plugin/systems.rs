@@ -356,9 +356,7 @@ pub(crate) fn step_cables(
         (None, Ok(h)) => h,
         (None, Err(why)) => {
             for (entity, sim) in list.iter_mut().filter(|(_, s)| !s.failed) {
-                sim.coupled.failed = true;
-                let t = sim.coupled.cable.time();
-                stop(&mut errors, &ropes, CableError::new(*entity, CableErrorKind::Configuration, t, why.clone()));
+                halt(&mut errors, &ropes, *entity, &mut sim.coupled, CableErrorKind::Configuration, why.clone());
             }
             return;
         }
@@ -379,9 +377,7 @@ pub(crate) fn step_cables(
         if let Some(g) = gravity.filter(|g| *g != sim.coupled.cable.gravity()) {
             if let Err(e) = sim.coupled.cable.set_gravity(g) {
                 if !sim.coupled.failed {
-                    sim.coupled.failed = true;
-                    let t = sim.coupled.cable.time();
-                    stop(&mut errors, &ropes, CableError::new(*entity, CableErrorKind::InvalidInput, t, format!("rapier's {e}")));
+                    halt(&mut errors, &ropes, *entity, &mut sim.coupled, CableErrorKind::InvalidInput, format!("rapier's {e}"));
                 }
                 continue;
             }
@@ -425,19 +421,10 @@ pub(crate) fn step_cables(
             invalid = invalid.or_else(|| invalid_input(*be, &input, velocity));
             given.insert(h.0, input);
         }
-        if !sim.coupled.failed {
-            if let Some(message) = unfit {
-                sim.coupled.failed = true;
-                let t = sim.coupled.cable.time();
-                stop(&mut errors, &ropes, CableError::new(*entity, CableErrorKind::Configuration, t, message));
-                continue;
-            }
-            if let Some(message) = invalid {
-                sim.coupled.failed = true;
-                let t = sim.coupled.cable.time();
-                stop(&mut errors, &ropes, CableError::new(*entity, CableErrorKind::InvalidInput, t, message));
-                continue;
-            }
+        let refused = unfit.map(|m| (CableErrorKind::Configuration, m)).or(invalid.map(|m| (CableErrorKind::InvalidInput, m)));
+        if let (false, Some((kind, message))) = (sim.coupled.failed, refused) {
+            halt(&mut errors, &ropes, *entity, &mut sim.coupled, kind, message);
+            continue;
         }
         if let (Some(trolley), Some((_, Role::Trolley { offset, .. }))) = (sim.rail, sim.coupled.roles[0]) {
             // The motor along the rail (a `PrismaticJoint`, or any joint
@@ -559,6 +546,21 @@ fn not_carriable(body: Entity, kind: Option<&RigidBody>, disabled: bool, rb: Opt
         _ => return None,
     };
     Some(format!("carried body {body} {why}: {FIX}"))
+}
+
+/// Stops cable `entity` before its step: its core marked failed, and a
+/// [`CableError`] of `kind` at its time ([`stop`]).
+fn halt(
+    errors: &mut MessageWriter<CableError>,
+    ropes: &Query<(Entity, &CableRopeOf)>,
+    entity: Entity,
+    coupled: &mut CoupledCable,
+    kind: CableErrorKind,
+    message: String,
+) {
+    coupled.failed = true;
+    let t = coupled.cable.time();
+    stop(errors, ropes, CableError::new(entity, kind, t, message));
 }
 
 /// Stops a cable: its [`CableError`], logged, and the same for every rope

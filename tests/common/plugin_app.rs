@@ -6,6 +6,7 @@ use bevy::time::TimeUpdateStrategy;
 use bevy_rapier3d::prelude::*;
 use bevy_rapier_cable::plugin::{CableError, CablePlugin};
 
+#[allow(dead_code)] // a binary may build its own app
 pub fn headless_app(dt: f32) -> App {
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, TransformPlugin, RapierPhysicsPlugin::<NoUserData>::default().in_fixed_schedule(), CablePlugin::default()));
@@ -22,4 +23,15 @@ pub fn headless_app(dt: f32) -> App {
 #[allow(dead_code)] // not every test binary reads errors
 pub fn cable_errors(app: &mut App) -> Vec<String> {
     app.world_mut().resource_mut::<Messages<CableError>>().drain().map(|e| e.to_string()).collect()
+}
+
+/// Runs `frames` updates and returns the `CableError`s sent in them.
+#[allow(dead_code)] // not every test binary reads errors
+pub fn errors_over(app: &mut App, frames: usize) -> Vec<CableError> {
+    let mut errors = Vec::new();
+    for _ in 0..frames {
+        app.update();
+        errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
+    }
+    errors
 }
