@@ -3,8 +3,8 @@
 //! (it cannot hold a phantom load), and so is one whose end's body (a hook)
 //! is despawned, its payload falling free; a despawned cable gives its
 //! bodies back to rapier as their components say; a despawned sling leg
-//! releases its island; a hook made dynamic is refused by name. Nothing
-//! panics.
+//! releases its island; a hook made dynamic is refused by name; a cable
+//! that stops hands its payload back to rapier. Nothing panics.
 
 #[path = "common/plugin_app.rs"]
 mod plugin_app;
@@ -117,6 +117,52 @@ fn a_hook_made_dynamic_stops_its_cable_by_name() {
     assert_eq!((errors[0].entity, errors[0].kind), (cable, CableErrorKind::Configuration));
     assert!(errors[0].message.contains(&format!("{hook}")) && errors[0].message.contains("was made `RigidBody::Dynamic`"), "{}", errors[0]);
     assert!(app.world().get::<CableSim>(cable).unwrap().failed);
+}
+
+/// A cable that stops (here: its hook made dynamic) no longer holds its
+/// payload: the payload is a rapier body again, with its gravity, and
+/// falls free from the velocity it had (exactly `n h g` after n steps).
+/// Before 2026-11-29 it hung frozen where the rope had left it (gravity
+/// off, put back on the stopped cable's pose at every step).
+#[test]
+fn a_stopped_cable_hands_its_payload_back_to_rapier() {
+    let (mut app, hook, payload, cable) = on_hook();
+    let v0 = app.world().get::<Velocity>(payload).unwrap().linear;
+    assert!(v0.length() < 0.05, "hanging at rest: {v0}");
+    app.world_mut().entity_mut(hook).insert((RigidBody::Dynamic, ColliderMassProperties::Mass(50.0)));
+    let errors = plugin_app::errors_over(&mut app, 30);
+    assert_eq!(errors.iter().map(|e| (e.entity, e.kind)).collect::<Vec<_>>(), vec![(cable, CableErrorKind::Configuration)], "{errors:?}");
+    let v = app.world().get::<Velocity>(payload).unwrap().linear;
+    let expected = v0.y - G * 30.0 * DT;
+    println!("after the stop: payload velocity {v} (free fall: y {expected})");
+    assert!((v.y - expected).abs() < 1e-3 * expected.abs() && v.x.abs() < 1e-4, "{v} against {expected}");
+    // The stopped cable keeps its entity and its last good state (the 29
+    // steps of `on_hook`'s 30 frames: the first frame builds it).
+    let st = app.world().get::<CableState>(cable).unwrap();
+    assert!(st.tensions[0] > 1900.0 && (st.time - 29.0 * f64::from(DT)).abs() < 1e-6, "{} N at {} s", st.tensions[0], st.time);
+}
+
+/// A cable refused at its first step (its rope laid through a collider)
+/// leaves its payload to rapier: it falls as a body without a rope does.
+#[test]
+fn a_cable_refused_at_its_first_step_leaves_its_payload_to_rapier() {
+    let mut app = plugin_app::headless_app(DT);
+    let w = app.world_mut();
+    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -2.0, 0.0), Collider::cuboid(0.5, 0.1, 0.5)));
+    let (payload, cable) = hang(&mut app, ());
+    let lone = app
+        .world_mut()
+        .spawn((RigidBody::Dynamic, Transform::from_xyz(5.0, -5.2, 0.0), Collider::ball(0.2), ColliderMassProperties::Mass(200.0), Velocity::default()))
+        .id();
+    let errors = plugin_app::errors_over(&mut app, 30);
+    assert_eq!(errors.iter().map(|e| (e.entity, e.kind)).collect::<Vec<_>>(), vec![(cable, CableErrorKind::Configuration)], "{errors:?}");
+    assert!(errors[0].message.contains("inside a collider"), "{}", errors[0]);
+    let w = app.world();
+    let (v, free) = (w.get::<Velocity>(payload).unwrap().linear, w.get::<Velocity>(lone).unwrap().linear);
+    let (y, y_free) = (w.get::<Transform>(payload).unwrap().translation.y, w.get::<Transform>(lone).unwrap().translation.y);
+    println!("payload of the refused cable: y {y} m, velocity {v}; a body without a rope: y {y_free} m, velocity {free}");
+    assert!(free.y < -0.9 * G * 30.0 * DT, "the lone body falls: {free}");
+    assert!((v - free).length() < 1e-6 && (y - y_free).abs() < 1e-5, "the payload does not fall as the lone body does");
 }
 
 /// A payload hanging on two legs from (±3, 0, 0): (app, payload, leg a,

@@ -2178,10 +2178,15 @@ pub fn contact_passes(approach: f64, h: f64) -> u32 {
 /// Phase 2, after rapier's step: the velocity change rapier's contacts
 /// gave each carried body (only if one of its colliders has an active
 /// contact) is kept as an impulse for the next step; the body is put on
-/// the cable's pose and velocity.
+/// the cable's pose and velocity. A failed cable no longer holds its
+/// bodies: they are left as rapier moved them.
 pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
     for cc in cables.iter_mut() {
         cc.free_written.clear();
+        if cc.failed {
+            cc.free_ends.clear();
+            continue;
+        }
         for end in std::mem::take(&mut cc.free_ends) {
             if let Some(written) = put_free_body(end, bodies, colliders, narrow_phase) {
                 cc.free_written.push((end, written));
@@ -2199,7 +2204,7 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
             let Some(rb) = bodies.get_mut(c.body) else {
                 continue;
             };
-            if touched && !cc.failed {
+            if touched {
                 let (_, r_now) = pose_of(rb);
                 let i_world = r_now * c.inertia * r_now.transpose();
                 c.contact = ((rb.linvel().as_dvec3() - c.landing.0) * c.mass, i_world * (rb.angvel().as_dvec3() - c.landing.1));

@@ -450,6 +450,10 @@ pub struct CableSim {
     /// written (once per cable).
     #[reflect(ignore)]
     pub(crate) warned_moved: bool,
+    /// Whether the bodies of a stopped cable were handed back to rapier
+    /// (once, at the step it stopped).
+    #[reflect(ignore)]
+    pub(crate) released: bool,
 }
 
 impl std::ops::Deref for CableSim {
@@ -527,17 +531,18 @@ pub enum CableErrorKind {
     /// A value the game gave a running cable cannot be used: a non-finite
     /// `ExternalForce`, `GravityScale`, `Damping`, velocity write or
     /// impulse on a body the cable carries. The cable stops before the step
-    /// and keeps its last good state.
+    /// and keeps its last good state; its carried bodies are rapier's again.
     InvalidInput,
     /// The cable's implicit solve failed (Newton did not converge at any
     /// split of the step, or the state left physical sense). The cable stops
-    /// and keeps its last good state.
+    /// and keeps its last good state; its carried bodies are rapier's again.
     Diverged,
 }
 
 /// Sent when a cable fails or is refused; logged through the `log` facade
 /// (Bevy's `LogPlugin` shows it) at error level as well. The cable stops
-/// (or is not built); its last good state stays. `Display` gives one line
+/// (or is not built); its last good state stays, and the bodies it carried
+/// are ordinary rapier bodies again. `Display` gives one line
 /// with the entity, the kind, the time and the reason.
 #[derive(Message, Debug, Clone, PartialEq, Reflect)]
 #[reflect(Debug, PartialEq)]

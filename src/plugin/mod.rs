@@ -120,7 +120,10 @@
 //!
 //! A stopped cable keeps its last good state ([`CableState`] stays
 //! readable); the ropes solved in its chain (sling legs) stop with it, each
-//! with its own message.
+//! with its own message. It no longer holds the bodies it carried: from the
+//! step it stopped they are ordinary rapier bodies again, as when the cable
+//! is despawned (a payload falls instead of hanging frozen where the rope
+//! left it).
 //!
 //! **Edits after spawning**: a [`CableDescriptor`] changed after its cable
 //! was built is ignored, with a warning (despawn the cable and spawn a new
@@ -294,7 +297,7 @@ impl CablePlugin {
             CableSystems::Init => {
                 (systems::drop_orphans, systems::refuse_edits, systems::init_cables, systems::record_legs).chain().in_set(CableSystems::Init).into_configs()
             }
-            CableSystems::Step => systems::step_cables.in_set(CableSystems::Step).into_configs(),
+            CableSystems::Step => (systems::step_cables, systems::release_stopped).chain().in_set(CableSystems::Step).into_configs(),
             CableSystems::WriteBodies => systems::write_bodies.in_set(CableSystems::WriteBodies).into_configs(),
             CableSystems::Readout => systems::readout.in_set(CableSystems::Readout).into_configs(),
         }

@@ -288,7 +288,7 @@ pub(crate) fn init_cables(
                 },
             ));
         }
-        commands.entity(*entity).insert((CableSim { coupled: cc, bodies: carried, rail, warned_moved: false }, CableState::default()));
+        commands.entity(*entity).insert((CableSim { coupled: cc, bodies: carried, rail, warned_moved: false, released: false }, CableState::default()));
     }
 }
 
@@ -638,12 +638,9 @@ type ReleaseComponents = (Option<&'static GravityScale>, Option<&'static Damping
 
 /// A cable's [`CableSim`] is going (the cable entity despawned, or the
 /// plugin removing it because a body it carries was despawned): the bodies
-/// it carried become ordinary rapier bodies again, as their components say
-/// (gravity scale, damping, external force, sleeping; the defaults where a
-/// component is absent; gyroscopic torques on, rapier's default), a
-/// trolley's rail motor acts in rapier again, and the sling legs solved in
-/// its chain are released (their descriptors removed, so they are not
-/// rebuilt from their initial path). Logged.
+/// it carried become ordinary rapier bodies again ([`release_bodies`]), and
+/// the sling legs solved in its chain are released (their descriptors
+/// removed, so they are not rebuilt from their initial path). Logged.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn release_cable(
     remove: On<Remove, CableSim>,
@@ -662,10 +659,59 @@ pub(crate) fn release_cable(
     let Ok(mut ctx) = ctx.single_mut() else {
         return;
     };
+    // A stopped cable's bodies were released when it stopped.
+    let released = if sim.released { Vec::new() } else { release_bodies(sim, &mut ctx.rigidbody_set.bodies, &handles, &components, &mut joints) };
+    let grafted: Vec<Entity> = legs.0.iter().filter(|(_, c)| **c == cable).map(|(l, _)| *l).collect();
+    for leg in &grafted {
+        legs.0.remove(leg);
+        if let Ok(mut e) = commands.get_entity(*leg) {
+            e.remove::<(CableRopeOf, CableDescriptor, CableState)>();
+        }
+    }
+    log::info!("cable {cable} removed: bodies {released:?} are rapier bodies again, sling legs {grafted:?} released");
+}
+
+/// A cable that stopped ([`CableError`]) no longer holds the bodies it
+/// carried: at the step it stopped they become ordinary rapier bodies
+/// again ([`release_bodies`]), as when the rope is removed, so a payload
+/// falls (or flies on) under rapier instead of hanging frozen where the
+/// rope left it, with gravity and damping off. The cable keeps its last
+/// good state ([`CableState`]) and its entity.
+pub(crate) fn release_stopped(
+    mut cables: Query<(Entity, &mut CableSim)>,
+    mut ctx: WriteRapierContext,
+    handles: Query<&RapierRigidBodyHandle>,
+    components: Query<ReleaseComponents>,
+    mut joints: Query<&mut ImpulseJoint>,
+) {
+    let Ok(mut ctx) = ctx.single_mut() else {
+        return;
+    };
+    for (cable, mut sim) in &mut cables {
+        if sim.coupled.failed && !sim.released {
+            sim.released = true;
+            let released = release_bodies(&sim, &mut ctx.rigidbody_set.bodies, &handles, &components, &mut joints);
+            log::info!("cable {cable} stopped: the bodies it carried, {released:?}, are rapier bodies again");
+        }
+    }
+}
+
+/// Hands the bodies cable `sim` carried back to rapier, as their
+/// components say (gravity scale, damping, external force, sleeping; the
+/// defaults where a component is absent; gyroscopic torques on, rapier's
+/// default), and a trolley's rail motor acts in rapier again. Returns the
+/// bodies released.
+fn release_bodies(
+    sim: &CableSim,
+    bodies: &mut bevy_rapier3d::rapier::dynamics::RigidBodySet,
+    handles: &Query<&RapierRigidBodyHandle>,
+    components: &Query<ReleaseComponents>,
+    joints: &mut Query<&mut ImpulseJoint>,
+) -> Vec<Entity> {
     let mut released = Vec::new();
     for (be, kind) in &sim.bodies {
         let CarriedBody::Lumped(_) = kind else { continue };
-        let Some(rb) = handles.get(*be).ok().and_then(|h| ctx.rigidbody_set.bodies.get_mut(h.0)) else {
+        let Some(rb) = handles.get(*be).ok().and_then(|h| bodies.get_mut(h.0)) else {
             continue;
         };
         let (scale, damping, force, sleeping) = components.get(*be).unwrap_or((None, None, None, None));
@@ -691,14 +737,7 @@ pub(crate) fn release_cable(
             j.set_changed();
         }
     }
-    let grafted: Vec<Entity> = legs.0.iter().filter(|(_, c)| **c == cable).map(|(l, _)| *l).collect();
-    for leg in &grafted {
-        legs.0.remove(leg);
-        if let Ok(mut e) = commands.get_entity(*leg) {
-            e.remove::<(CableRopeOf, CableDescriptor, CableState)>();
-        }
-    }
-    log::info!("cable {cable} removed: bodies {released:?} are rapier bodies again, sling legs {grafted:?} released");
+    released
 }
 
 /// Cables whose carried body was despawned, or a body that holds one of
