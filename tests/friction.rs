@@ -94,6 +94,100 @@ fn sticking_friction_tangents_are_the_derivatives_of_its_wrench() {
     }
 }
 
+/// Against a curved obstacle ([`Curve`]: a ball, or a cylinder's round
+/// side) a contact's stiffness tangent is the derivative of its force,
+/// with the turning normal's part `−(F_n/ρ)(P − n nᵀ)` (central
+/// differences over the point's displacement, within 1e-6 of the largest
+/// entry; at rest, where the rate's own turn does not act), and its
+/// normal follows the surface: a point slid 1 cm along the drum from the
+/// touch point at the contact's depth feels the same normal force,
+/// pointing from the axis (against the frozen tangent plane it would be
+/// pushed out by `(1 cm)²/(2R)`).
+#[test]
+fn a_contact_on_a_curve_has_its_derivatives_as_tangents_and_follows_the_surface() {
+    let law = ImpactLaw::hertz(1.154e11, 0.005, 50.0, 1e-5).unwrap();
+    let (big, r) = (0.5, 0.005);
+    for axis in [None, Some(DVec3::Z)] {
+        // The plane y = 0.5 touches the ball or the drum (axis z) of
+        // radius 0.5 centred at the origin at (0, 0.5, 0).
+        let c = SphereContact::fixed(DVec3::new(0.0, big, 0.0), DVec3::Y, r, law).with_curve(Curve { radius: big, axis, centre_velocity: DVec3::ZERO });
+        // 4 µm into it, off the touch point.
+        let point = match axis {
+            None => DVec3::new(0.026, 1.0, 0.04).normalize() * (big + r - 4e-6),
+            Some(_) => DVec3::new(0.026, 1.0, 0.0).normalize() * (big + r - 4e-6) + DVec3::new(0.0, 0.0, 0.02),
+        };
+        let base = PointState { rotation: DMat3::IDENTITY, point, velocity: DVec3::ZERO, angular_velocity: DVec3::ZERO };
+        let w0 = c.wrench(0.0, &base);
+        assert!(w0.force.length() > 10.0, "{axis:?}: not in contact: {}", w0.force);
+        let k = w0.stiffness.d;
+        let scale = k.to_cols_array().iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let eps = 1e-10;
+        for j in 0..3 {
+            let d = DVec3::AXES[j] * eps;
+            let f = |p: DVec3| c.wrench(0.0, &PointState { point: p, ..base }).force;
+            let fd = -(f(base.point + d) - f(base.point - d)) / (2.0 * eps);
+            for i in 0..3 {
+                assert!((fd[i] - k.col(j)[i]).abs() < 1e-6 * scale, "{axis:?} ({i}, {j}): finite difference {:e}, tangent {:e}", fd[i], k.col(j)[i]);
+            }
+        }
+        // Slid 1 cm along the surface (about the centre or the axis) at the
+        // same depth: the same force, along the new normal.
+        let turn = DMat3::from_axis_angle(DVec3::Z, 0.01 / big);
+        let slid = PointState { point: turn * base.point, ..base };
+        let (f0, f1) = (c.normal_force(0.0, &base), c.normal_force(0.0, &slid));
+        let n1 = c.wrench(0.0, &slid).force.normalize();
+        let expected = (turn * base.point - axis.map_or(DVec3::ZERO, |a| a * base.point.dot(a))).normalize();
+        println!("{axis:?}: normal force {f0:.6} N at the touch, {f1:.6} N slid 1 cm; normal {n1} vs {expected}");
+        assert!((f1 / f0 - 1.0).abs() < 1e-12 && n1.distance(expected) < 1e-12, "{axis:?}: {f0} → {f1}, {n1} vs {expected}");
+    }
+}
+
+/// A rope over a frictionless drum is an ideal pulley (an Atwood
+/// machine): 10 mm steel rope (EI a tenth of the preset's, as in
+/// `capstan_friction.toml`, damping 0.005 s) half a turn over a fixed
+/// drum of R = 0.5 m with 3 m legs, a 100 kg and a 120 kg ball let go
+/// at rest, 1.5 s at 1/60 s. The heavy ball sinks by
+/// `x(t) = A (cosh k t − 1)`, `A = (m₂ − m₁)/(2ρ)`, `k² = 2ρg/M` (the
+/// legs' weight shifts as the rope runs; `M` the balls and the whole
+/// rope), and the light one rises by as much: 0.99619 m at 1.5 s.
+#[test]
+fn a_rope_runs_over_a_frictionless_drum_as_over_an_ideal_pulley() {
+    let radius = 0.506;
+    let mut path = vec![DVec3::new(-radius, -3.0, 0.0), DVec3::new(-radius, 0.0, 0.0)];
+    for k in 1..32 {
+        let a = std::f64::consts::PI * (1.0 - k as f64 / 32.0);
+        path.push(DVec3::new(radius * a.cos(), radius * a.sin(), 0.0));
+    }
+    path.extend([DVec3::new(radius, 0.0, 0.0), DVec3::new(radius, -3.0, 0.0)]);
+    let length: f64 = path.windows(2).map(|w| w[0].distance(w[1])).sum();
+    let points: Vec<String> = path.iter().map(|p| format!("[{:.12}, {:.12}, 0.0]", p.x, p.y)).collect();
+    let ball = |name: &str, mass: f64, x: f64| {
+        format!("[[body]]\nname = \"{name}\"\ntype = \"dynamic\"\nshape = \"ball\"\nradius = 0.15\nmass = {mass}\nposition = [{x}, -3.15, 0.0]\n\n")
+    };
+    let source = format!(
+        "[simulation]\nduration = 1.5\ndt = 0.016666666666666666\n\n\
+         [[body]]\nname = \"drum\"\ntype = \"fixed\"\nshape = \"cylinder\"\nradius = 0.5\nhalf_height = 1.0\nrotation = [90.0, 0.0, 0.0]\nfriction = 0.0\n\n\
+         {}{}\
+         [[cable]]\nname = \"rope\"\nlength = {length:.12}\nsegments = 152\ndiameter = 0.010\nmaterial = \"steel_wire_rope_6x36_iwrc\"\ndamping = 0.005\nei = 0.3\nfriction = 0.0\n\
+         start = {{ body = \"light\", anchor = [0.0, 0.15, 0.0] }}\nend = {{ body = \"heavy\", anchor = [0.0, 0.15, 0.0] }}\npath = [{}]\n\n\
+         [[probe]]\nname = \"light\"\nbody = \"light\"\nquantity = \"position\"\n\n[[probe]]\nname = \"heavy\"\nbody = \"heavy\"\nquantity = \"position\"\n",
+        ball("light", 100.0, -radius),
+        ball("heavy", 120.0, radius),
+        points.join(", ")
+    );
+    let (_, rows) = run_source(&source, "atwood.toml");
+    let rho = RopeMaterial::steel_6x36_iwrc(0.01).section().linear_density;
+    let total = 220.0 + rho * length;
+    let (a, k) = (20.0 / (2.0 * rho), (2.0 * rho * 9.81 / total).sqrt());
+    for row in rows.iter().filter(|r| (r[0] * 4.0 - (r[0] * 4.0).round()).abs() < 1e-9 && r[0] > 0.4) {
+        let (t, up, down) = (row[0], row[2] + 3.15, -3.15 - row[5]);
+        let expected = a * ((k * t).cosh() - 1.0);
+        let mean = 0.5 * (up + down);
+        println!("t = {t:.2} s: heavy ball down {down:.5} m, light ball up {up:.5} m, closed form {expected:.5} m ({:+.1e})", mean / expected - 1.0);
+        assert!((mean / expected - 1.0).abs() < 1e-2, "t = {t}: {mean} m against {expected} m");
+    }
+}
+
 /// Friction between two points of ropes (a [`PairContact`] with
 /// [`PairFriction`], rope on rope): while it sticks, its stiffness and
 /// damping are the derivatives of the force on the first point with
@@ -363,10 +457,15 @@ fn capstan_friction_scenario_follows_euler_eytelwein() {
 ///   `e^(μθ)` within 5e-3 on the mean and 2 % in every frame (the helix
 ///   angle, 0.54°, changes the exponent by 4e-5).
 /// * Before and after, the wrap holds: the ratio stays inside the capstan
-///   limit, the hand's tension is constant over the last 3 s (stick, no
-///   creep: within 0.05 N) and the ball's height within 2e-5 m (it swings
-///   3.5 mm sideways as a 1.2 m pendulum, which moves it up and down by
-///   5 µm).
+///   limit, the ball's height within 2e-5 m (it swings 3.5 mm sideways as
+///   a 1.2 m pendulum, which moves it up and down by 5 µm), and the hand's
+///   tension does not creep: within 0.05 N over the last 2 s, and within
+///   0.2 N over the last 3 s. (Since the friction limit follows a growing
+///   normal force, 2026-11-29, the wrap is left at 99.7 % of its limit when
+///   the hand stops, 16.85 against 16.90, where it was left at 16.35
+///   before; there the load's swing, ±0.15 N on T_load, makes it slip
+///   once more, by 0.12 N on T_hand at 5.4 s, and then it holds: 0.011 N
+///   over the last 2 s.)
 /// * The post's `contact_force` probe carries both tensions and the weight
 ///   of the rope between the probes, within 1e-3.
 #[test]
@@ -411,7 +510,10 @@ fn a_rope_wrapped_round_a_post_holds_and_slips_at_the_capstan_ratio() {
         assert!(spread(4) < 2e-5, "the ball moved {} m while the wrap holds", spread(4));
         assert!((last[7] / -down - 1.0).abs() < 1e-3, "post force {} vs {down}", last[7]);
     }
-    let late: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] >= 5.0).collect();
-    let creep = late.iter().map(|r| r[1]).fold(f64::NEG_INFINITY, f64::max) - late.iter().map(|r| r[1]).fold(f64::INFINITY, f64::min);
-    assert!(creep < 0.05, "the hand's tension changed by {creep} N while the wrap holds");
+    for (from, within) in [(6.0, 0.05), (5.0, 0.2)] {
+        let late: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] >= from).collect();
+        let creep = late.iter().map(|r| r[1]).fold(f64::NEG_INFINITY, f64::max) - late.iter().map(|r| r[1]).fold(f64::INFINITY, f64::min);
+        println!("the hand's tension from {from} s on: within {creep:.4} N");
+        assert!(creep < within, "the hand's tension changed by {creep} N from {from} s on while the wrap holds");
+    }
 }

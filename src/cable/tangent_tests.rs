@@ -502,7 +502,7 @@ fn friction_contact_tangents_match_finite_differences() {
         let plane = at.point - normal * (radius - 0.02);
         let anchor = at.point - normal * radius + DVec3::new(0.004, 0.0, -0.003);
         let friction = CoulombFriction { at_surface: false, ..CoulombFriction::from_law(5.0, &law, anchor, at, 1e9).unwrap() };
-        let contact = SphereContact { point: plane, normal, velocity: DVec3::ZERO, time: 0.0, radius, law, friction: Some(friction) };
+        let contact = SphereContact { point: plane, normal, velocity: DVec3::ZERO, time: 0.0, radius, law, friction: Some(friction), curve: None };
         let (f, sticks) = contact.friction_force(0.0, at);
         assert!(sticks && f.length() > 1.0, "contact {k}: {f} {sticks}");
         m.chain.forces_mut()[k].element = Arc::new(contact);

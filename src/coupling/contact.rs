@@ -22,7 +22,7 @@
 
 use super::{BodyMotion, CarriedLink};
 use crate::cable::{
-    AttachedForce, AttachedPair, BaseState, Cable, Chain, ContactError, CoulombFriction, ImpactLaw, PairContact, PairFriction, PointState, SphereContact,
+    AttachedForce, AttachedPair, BaseState, Cable, Chain, ContactError, CoulombFriction, Curve, ImpactLaw, PairContact, PairFriction, PointState, SphereContact,
 };
 use glam::{DMat3, DVec3};
 use rapier3d::prelude as rp;
@@ -669,7 +669,34 @@ impl<'a> Obstacle<'a> {
     /// the step.
     fn contact(&self, (q, normal, _): (DVec3, DVec3, f64), radius: f64, law: ImpactLaw) -> SphereContact {
         let point = self.origin + self.rotation * q;
-        SphereContact { point, normal: self.rotation * normal, velocity: self.surface_velocity(point), time: self.now, radius, law, friction: None }
+        let contact = SphereContact {
+            point,
+            normal: self.rotation * normal,
+            velocity: self.surface_velocity(point),
+            time: self.now,
+            radius,
+            law,
+            friction: None,
+            curve: None,
+        };
+        match round_at(self.collider.shape(), q, normal) {
+            Some((r, centre, axis)) => {
+                // The exact surface point and normal across from the centre.
+                let mut d = q - centre;
+                if let Some(a) = axis {
+                    d -= a * d.dot(a);
+                }
+                let n = d.normalize();
+                if !n.is_finite() {
+                    return contact;
+                }
+                let point = self.origin + self.rotation * (centre + n * r);
+                let exact = SphereContact { point, normal: self.rotation * n, velocity: self.surface_velocity(point), ..contact };
+                let c = self.origin + self.rotation * centre;
+                exact.with_curve(Curve { radius: r, axis: axis.map(|a| self.rotation * a), centre_velocity: self.surface_velocity(c) })
+            }
+            None => contact,
+        }
     }
 
     /// Velocity of the obstacle's surface at world point `q`, m/s.
@@ -680,6 +707,40 @@ impl<'a> Obstacle<'a> {
             (None, None) => DVec3::ZERO,
         }
     }
+}
+
+/// Whether the surface point `q` of `shape` with outward normal `normal`
+/// (collider frame, as parry's `f32` projection gives them) lies on a ball
+/// or on the round side of a cylinder or a capsule: the radius there (m),
+/// the exact centre (of the ball, or the point of the axis across from
+/// `q`; collider frame, m) and the cylinder's axis (`None` for a ball or
+/// a capsule's end). `None` on flat faces, rims and other shapes.
+fn round_at(shape: &dyn rp::Shape, q: DVec3, normal: DVec3) -> Option<(f64, DVec3, Option<DVec3>)> {
+    // On the round surface as far as `f32` tells (parry's projection is
+    // off by up to 2e-6 m on a 0.5 m drum).
+    let on = |centre: DVec3, r: f64| (q - normal * r - centre).length() <= 1e-4 * r;
+    if let Some(ball) = shape.as_ball() {
+        let r = f64::from(ball.radius);
+        return on(DVec3::ZERO, r).then_some((r, DVec3::ZERO, None));
+    }
+    if let Some(cylinder) = shape.as_cylinder() {
+        let (r, half) = (f64::from(cylinder.radius), f64::from(cylinder.half_height));
+        // (A support point across a penetrating element lies on the rim
+        // with the side's radial normal: the side's plane too.)
+        let side = q.y.abs() <= half * (1.0 + 1e-6) && normal.y.abs() < 1e-4;
+        let centre = DVec3::new(0.0, q.y, 0.0);
+        return (side && on(centre, r)).then_some((r, centre, Some(DVec3::Y)));
+    }
+    if let Some(capsule) = shape.as_capsule() {
+        let (a, b, r) = (capsule.segment.a.as_dvec3(), capsule.segment.b.as_dvec3(), f64::from(capsule.radius));
+        let ab = b - a;
+        let len2 = ab.length_squared();
+        let f = if len2 > 0.0 { ((q - a).dot(ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+        let centre = a + ab * f;
+        let axis = (f > 0.0 && f < 1.0).then(|| ab / len2.sqrt());
+        return on(centre, r).then_some((r, centre, axis));
+    }
+    None
 }
 
 /// The surface point of `shape` nearest to `p` (collider frame, m), its
