@@ -666,7 +666,10 @@ impl<'a> Obstacle<'a> {
 
     /// The contact of a sphere of `radius` (m) with the obstacle's tangent
     /// plane at the surface point `q` with normal `normal` (its frame), for
-    /// the step.
+    /// the step; on a ball, a cylinder's round side or a capsule
+    /// ([`round_at`]), with the curved surface itself ([`Curve`]), its
+    /// point and normal recomputed in `f64` from the shape's centre or
+    /// axis.
     fn contact(&self, (q, normal, _): (DVec3, DVec3, f64), radius: f64, law: ImpactLaw) -> SphereContact {
         let point = self.origin + self.rotation * q;
         let contact = SphereContact {
