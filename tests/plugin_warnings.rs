@@ -124,3 +124,38 @@ fn a_carried_body_moved_by_hand_is_warned_once() {
     assert!(logged[0].starts_with("WARN") && logged[0].contains(&format!("{crate_}")) && logged[0].contains("the move is undone"), "{}", logged[0]);
     assert!((x(&app) - before).abs() < 0.2, "the crate stayed on its rope: {} vs {before}", x(&app));
 }
+
+/// A cable that stops hands its payload back to rapier, which then falls:
+/// that is not a move by hand, and is not warned as one.
+#[test]
+fn the_falling_payload_of_a_stopped_cable_is_not_warned_as_moved() {
+    install_logger();
+    let mut app = plugin_app::headless_app(1.0 / 60.0);
+    let w = app.world_mut();
+    // (Entities numbered apart from the other tests' in this binary, whose
+    // messages share the log.)
+    for _ in 0..40 {
+        w.spawn_empty();
+    }
+    let hook = w.spawn((RigidBody::KinematicPositionBased, Transform::from_xyz(0.0, 10.0, 0.0), Collider::ball(0.05))).id();
+    let crate_ = w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, 4.5, 0.0), Collider::cuboid(0.5, 0.5, 0.5), ColliderMassProperties::Mass(500.0))).id();
+    w.spawn(
+        CableDescriptor::new(5.0)
+            .material(RopeMaterial::steel_6x36_iwrc(0.02))
+            .start(CableAnchor::body(hook, Vec3::ZERO))
+            .end(CableAnchor::body(crate_, Vec3::Y * 0.5)),
+    );
+    for _ in 0..30 {
+        app.update();
+    }
+    // The hook made dynamic stops the cable (a `Configuration` error).
+    app.world_mut().entity_mut(hook).insert((RigidBody::Dynamic, ColliderMassProperties::Mass(50.0)));
+    for _ in 0..30 {
+        app.update();
+    }
+    let y = app.world().get::<Transform>(crate_).unwrap().translation.y;
+    let moved = LOGGED.lock().unwrap().iter().filter(|l| l.contains("was moved") && l.contains(&format!("{crate_}"))).cloned().collect::<Vec<String>>();
+    println!("the crate fell to y = {y} m; warnings: {moved:?}");
+    assert!(y < 3.5, "the payload of the stopped cable did not fall: y = {y}");
+    assert!(moved.is_empty(), "{moved:?}");
+}

@@ -397,7 +397,8 @@ pub(crate) fn step_cables(
                 continue;
             };
             unfit = unfit.or_else(|| not_carriable(*be, kind, disabled, ctx.rigidbody_set.bodies.get(h.0)));
-            if !sim.warned_moved {
+            // (A stopped cable's bodies are rapier's again: they move.)
+            if !sim.warned_moved && !sim.coupled.failed {
                 if let Some((off, at)) = moved_from_rope(&sim.coupled, &ctx.rigidbody_set.bodies, h.0) {
                     sim.warned_moved = true;
                     log::warn!(
