@@ -257,3 +257,35 @@ fn an_undamped_hook_and_crate_under_a_swinging_jib_run_in_the_plugin() {
     assert!(jib_x > 1.0, "the jib did not move: {jib_x}");
     assert!(lowest > 1.10, "the crate fell to {lowest} m: the ropes would have to stretch");
 }
+
+/// A rope with both ends on one dynamic body (a handle on a crate) is
+/// refused at creation by name, with what to do instead; the body stays a
+/// rapier body and falls.
+#[test]
+fn a_rope_from_a_body_to_itself_is_refused_by_name() {
+    let mut app = plugin_app::headless_app(DT);
+    let w = app.world_mut();
+    let crate_ = w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, 2.0, 0.0), Collider::cuboid(0.5, 0.5, 0.5), ColliderMassProperties::Mass(50.0))).id();
+    let section = preset("steel_wire_rope_6x36_iwrc", 0.012).unwrap();
+    let handle = w
+        .spawn(
+            CableDescriptor::from_section(
+                1.6,
+                8,
+                RopeMaterial::custom(section, 0.012),
+                CableAnchor::body(crate_, Vec3::new(-0.4, 0.5, 0.0)),
+                CableAnchor::body(crate_, Vec3::new(0.4, 0.5, 0.0)),
+            )
+            .path([Vec3::new(-0.4, 2.5, 0.0), Vec3::new(-0.4, 3.1, 0.0), Vec3::new(0.4, 3.1, 0.0), Vec3::new(0.4, 2.5, 0.0)]),
+        )
+        .id();
+    let errors = plugin_app::errors_over(&mut app, 30);
+    println!("{errors:#?}");
+    assert_eq!(errors.iter().map(|e| (e.entity, e.kind)).collect::<Vec<_>>(), vec![(handle, CableErrorKind::Configuration)], "{errors:?}");
+    let m = &errors[0].message;
+    assert!(m.contains(&format!("{crate_} to itself")) && m.contains("two-leg sling"), "{m}");
+    assert!(app.world().get::<CableSim>(handle).is_none());
+    let v = app.world().get::<Velocity>(crate_).map_or(0.0, |v| v.linear.y);
+    let y = app.world().get::<Transform>(crate_).unwrap().translation.y;
+    assert!(y < 1.0, "the crate falls as a rapier body: y = {y} (velocity {v})");
+}

@@ -278,7 +278,7 @@ impl CouplingError {
     pub fn describe(&self, body: &dyn Fn(rp::RigidBodyHandle) -> String, cable: &dyn Fn(usize) -> String) -> String {
         match *self {
             CouplingError::HubLoop { hub, other } if hub == other => format!(
-                "the cable runs from {} to itself; that body hangs on several cables and is solved with them as one island, where a cable's other end must be the world, a fixed or kinematic body, or free",
+                "the cable runs from {} to itself: a rope with both ends on one dynamic body (a handle, a strap round a load) closes a loop through it, which the cable solve does not handle; hang the body on two cables instead, each from it to the hook or the point it hangs from (a two-leg sling), or put the rope's other end on another body",
                 body(hub)
             ),
             CouplingError::HubLoop { hub, other } => format!(
