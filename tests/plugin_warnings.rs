@@ -40,6 +40,12 @@ fn install_logger() {
 /// `k h²/m` ≈ 1 000 at 1/60 s. The plugin says so once, at creation, with
 /// the number of coupled sub-steps that would bring it to 1, as `cablesim`
 /// does; a payload the cable carries gets no such warning.
+/// A 20 mm steel rope of `length` m from the origin of body `from` to the
+/// point `at` of body `to` (its frame, m).
+fn steel_rope(length: f32, from: Entity, to: Entity, at: Vec3) -> CableDescriptor {
+    CableDescriptor::new(length).material(RopeMaterial::steel_6x36_iwrc(0.02)).start(CableAnchor::body(from, Vec3::ZERO)).end(CableAnchor::body(to, at))
+}
+
 #[test]
 fn an_explicit_coupling_likely_unstable_is_warned_at_creation() {
     install_logger();
@@ -56,12 +62,7 @@ fn an_explicit_coupling_likely_unstable_is_warned_at_creation() {
         ))
         .id();
     let payload = w.spawn((RigidBody::Dynamic, Transform::from_xyz(1.0, -0.3, 0.0), Collider::ball(0.3), ColliderMassProperties::Mass(100.0))).id();
-    w.spawn(
-        CableDescriptor::new(10.0)
-            .material(RopeMaterial::steel_6x36_iwrc(0.02))
-            .start(CableAnchor::body(arm, Vec3::ZERO))
-            .end(CableAnchor::body(payload, Vec3::Y * 0.3)),
-    );
+    w.spawn(steel_rope(10.0, arm, payload, Vec3::Y * 0.3));
     for _ in 0..3 {
         app.update();
     }
@@ -99,12 +100,7 @@ fn a_carried_body_moved_by_hand_is_warned_once() {
             Velocity::linear(Vec3::X),
         ))
         .id();
-    w.spawn(
-        CableDescriptor::new(5.0)
-            .material(RopeMaterial::steel_6x36_iwrc(0.02))
-            .start(CableAnchor::body(hook, Vec3::ZERO))
-            .end(CableAnchor::body(crate_, Vec3::Y * 0.5)),
-    );
+    w.spawn(steel_rope(5.0, hook, crate_, Vec3::Y * 0.5));
     let moved = || LOGGED.lock().unwrap().iter().filter(|l| l.contains("was moved")).cloned().collect::<Vec<String>>();
     for _ in 0..60 {
         app.update();
@@ -139,12 +135,7 @@ fn the_falling_payload_of_a_stopped_cable_is_not_warned_as_moved() {
     }
     let hook = w.spawn((RigidBody::KinematicPositionBased, Transform::from_xyz(0.0, 10.0, 0.0), Collider::ball(0.05))).id();
     let crate_ = w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, 4.5, 0.0), Collider::cuboid(0.5, 0.5, 0.5), ColliderMassProperties::Mass(500.0))).id();
-    w.spawn(
-        CableDescriptor::new(5.0)
-            .material(RopeMaterial::steel_6x36_iwrc(0.02))
-            .start(CableAnchor::body(hook, Vec3::ZERO))
-            .end(CableAnchor::body(crate_, Vec3::Y * 0.5)),
-    );
+    w.spawn(steel_rope(5.0, hook, crate_, Vec3::Y * 0.5));
     for _ in 0..30 {
         app.update();
     }

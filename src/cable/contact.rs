@@ -378,8 +378,8 @@ impl SphereContact {
     /// the plane, zero without friction or contact), and whether the
     /// contact sticks.
     pub fn friction_force(&self, t: f64, at: &PointState) -> (DVec3, bool) {
-        let normal = self.normal_force(t, at);
-        self.tangential(t, at, normal).map_or((DVec3::ZERO, false), |x| (x.force, x.direction == DVec3::ZERO))
+        let (touch, normal) = self.pressed(t, at);
+        self.tangential(t, at, touch.normal, normal).map_or((DVec3::ZERO, false), |x| (x.force, x.direction == DVec3::ZERO))
     }
 
     /// Where the friction anchor goes for the next step, at time `t` (s),
@@ -392,9 +392,8 @@ impl SphereContact {
     /// friction.
     pub fn next_anchor(&self, t: f64, at: &PointState) -> Option<DVec3> {
         let friction = self.friction?;
-        let touch = self.touch(t, at);
-        let normal = self.law.force(touch.depth, touch.rate).0;
-        let stretch = match self.tangential(t, at, normal) {
+        let (touch, normal) = self.pressed(t, at);
+        let stretch = match self.tangential(t, at, touch.normal, normal) {
             None => DVec3::ZERO,
             Some(x) if x.direction == DVec3::ZERO => x.stretch,
             Some(x) => -x.force / friction.stiffness,
@@ -403,15 +402,15 @@ impl SphereContact {
         Some(at.point - arm - stretch)
     }
 
-    /// The tangential part at normal force `normal` (N); `None` without
-    /// friction or without contact.
-    fn tangential(&self, t: f64, at: &PointState, normal: f64) -> Option<Tangential> {
+    /// The tangential part at normal force `normal` (N), the obstacle's
+    /// normal there `n` ([`Touch::normal`]); `None` without friction or
+    /// without contact.
+    fn tangential(&self, t: f64, at: &PointState, n: DVec3, normal: f64) -> Option<Tangential> {
         let friction = self.friction?;
         let limit = friction.coefficient * normal.min(friction.normal_bound * (1.0 + BOUND_GROWTH));
         if limit <= 0.0 {
             return None;
         }
-        let n = self.touch(t, at).normal;
         let (arm, turn) = if friction.at_surface {
             let estimate = (friction.spin + at.angular_velocity) * (0.5 * (t - self.time));
             (-n * self.radius, unwrap_turn(rotation_vector(&(at.rotation * friction.frame.transpose())), estimate))
@@ -467,8 +466,13 @@ impl SphereContact {
     /// The normal force the plane puts on the sphere at time `t` (s), N
     /// (≥ 0).
     pub fn normal_force(&self, t: f64, at: &PointState) -> f64 {
-        let (d, r) = self.depth(t, at);
-        self.law.force(d, r).0
+        self.pressed(t, at).1
+    }
+
+    /// [`SphereContact::touch`] and the normal force there, N.
+    fn pressed(&self, t: f64, at: &PointState) -> (Touch, f64) {
+        let touch = self.touch(t, at);
+        (touch, self.law.force(touch.depth, touch.rate).0)
     }
 }
 
@@ -689,7 +693,7 @@ impl ForceElement for SphereContact {
             let p = curve.axis.map_or(DMat3::IDENTITY, |a| DMat3::IDENTITY - outer3(a, a));
             w.stiffness.d -= (p - nn) * (f / touch.reach);
         }
-        if let (Some(friction), Some(x)) = (self.friction, self.tangential(t, at, f)) {
+        if let (Some(friction), Some(x)) = (self.friction, self.tangential(t, at, n, f)) {
             // Sticking: −∂F_t/∂c = k_t P. Slipping, F_t = μ F_n d̂ with
             // d̂ the trial force's direction: k_t (μ F_n/|F_trial|)(P − d̂ d̂ᵀ),
             // symmetric; the term μ d̂ ∂F_n/∂c that couples the slip
@@ -709,10 +713,11 @@ impl ForceElement for SphereContact {
     }
 
     fn energy(&self, t: f64, at: &PointState) -> f64 {
-        let normal = self.law.potential(self.touch(t, at).depth);
+        let (touch, force) = self.pressed(t, at);
+        let normal = self.law.potential(touch.depth);
         // The stick spring's energy while it sticks (a slipping contact
         // dissipates).
-        let stick = match (self.friction, self.tangential(t, at, self.normal_force(t, at))) {
+        let stick = match (self.friction, self.tangential(t, at, touch.normal, force)) {
             (Some(friction), Some(x)) if x.direction == DVec3::ZERO => 0.5 * friction.stiffness * x.stretch.length_squared(),
             _ => 0.0,
         };
