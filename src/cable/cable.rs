@@ -1128,7 +1128,10 @@ impl RopeView<'_> {
             .iter()
             .zip(ch.force_element_points())
             .filter(|(f, at)| on_rope(f.link) && f.element.contact_force(t, at).is_some())
-            .map(|(f, at)| (at.point, f.element.wrench(t, &at).force))
+            .map(|(f, at)| {
+                let w = f.element.wrench(t, &at);
+                (at.point + w.arm, w.force)
+            })
             .collect();
         for (p, (a, b)) in ch.pairs().iter().zip(ch.pair_points()) {
             if p.element.contact_force(t, &a, &b).is_none() {

@@ -18,7 +18,9 @@
 //! point of a link against a plane, frozen for the step (an active set
 //! frozen per step): the contact issue finds, at the start of each step,
 //! the closest point and normal of a collider for each rope element and
-//! puts one such element there. Its tangents `K = ∂F_n/∂δ n nᵀ` and
+//! puts one such element there (on a curved surface, [`Curve`], against
+//! the surface itself; for a rope element's interior, of the element's
+//! segment, [`Span`]). Its tangents `K = ∂F_n/∂δ n nᵀ` and
 //! `C = ∂F_n/∂δ̇ n nᵀ` enter the implicit solve like any force element, so
 //! a steel contact is as stable at the frame step as the rope's own
 //! springs.
@@ -214,6 +216,31 @@ pub struct SphereContact {
     pub friction: Option<CoulombFriction>,
     /// The obstacle's curved surface there (`None`: the plane).
     pub curve: Option<Curve>,
+    /// The rope element's segment through the point, when the contact is
+    /// of the element's capsule rather than of the sphere at the point
+    /// (`None`: the sphere). See [`Span`].
+    pub span: Option<Span>,
+}
+
+/// The segment of a rope element through a [`SphereContact`]'s point: from
+/// `lo` to `hi` (m, `lo ≤ 0 ≤ hi`) along the link's unit `axis` (link
+/// frame) from the point. Against a [`Curve`] the contact is then at the
+/// segment's point nearest the ball's centre or the cylinder's axis,
+/// found again at every evaluation, and its force acts there (with its
+/// moment about the point): an element sliding over a box's edge (a
+/// cylinder of radius 0) is held where the edge is under it now, not at
+/// the material point that was over the edge at the step's start, whose
+/// plane (square to the element then) let the element turn about that
+/// point into the edge within the step (docs/architecture.md, "Sharp
+/// edges"). Against a plane the point itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Span {
+    /// The element's unit axis, link frame.
+    pub axis: DVec3,
+    /// Start of the segment from the point along `axis`, m (≤ 0).
+    pub lo: f64,
+    /// End of the segment from the point along `axis`, m (≥ 0).
+    pub hi: f64,
 }
 
 /// The curved obstacle of a [`SphereContact`], frozen for the step: a
@@ -229,7 +256,8 @@ pub struct SphereContact {
 /// against the motion (docs/architecture.md, "Curved obstacles").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Curve {
-    /// Radius of the ball or the cylinder, m (> 0).
+    /// Radius of the ball or the cylinder, m (≥ 0; 0 for a box's edge, a
+    /// line, or its corner, a point).
     pub radius: f64,
     /// The cylinder's unit axis, world (`None`: a ball).
     pub axis: Option<DVec3>,
@@ -249,6 +277,14 @@ struct Touch {
     /// Distance from a [`Curve`]'s centre or axis, m (infinite for a
     /// plane).
     reach: f64,
+    /// The directions along which the normal does not turn as the point
+    /// moves (a cylinder's or an edge's axis; with a [`Span`] whose nearest
+    /// point is inside the segment, the element's axis too): the
+    /// curvature's tangent is `(I − Σ a aᵀ − n nᵀ)/reach`.
+    flat: [Option<DVec3>; 2],
+    /// From the contact's point to where the force acts (a [`Span`]'s
+    /// nearest point), world, m.
+    arm: DVec3,
 }
 
 /// How far (a fraction) a [`SphereContact`]'s normal force may grow in a
@@ -358,13 +394,19 @@ impl SphereContact {
     /// A contact with a fixed plane through `point` (m) with unit outward
     /// `normal`, for a sphere of `radius` m, frictionless.
     pub fn fixed(point: DVec3, normal: DVec3, radius: f64, law: ImpactLaw) -> Self {
-        SphereContact { point, normal, velocity: DVec3::ZERO, time: 0.0, radius, law, friction: None, curve: None }
+        SphereContact { point, normal, velocity: DVec3::ZERO, time: 0.0, radius, law, friction: None, curve: None, span: None }
     }
 
     /// The same contact against the curved surface `curve` (tangent to
     /// the contact's plane at its point).
     pub fn with_curve(mut self, curve: Curve) -> Self {
         self.curve = Some(curve);
+        self
+    }
+
+    /// The same contact of the element's segment `span` ([`Span`]).
+    pub fn with_span(mut self, span: Span) -> Self {
+        self.span = Some(span);
         self
     }
 
@@ -438,29 +480,64 @@ impl SphereContact {
         (x.depth, x.rate)
     }
 
-    /// The point's state `at` against the plane, or the [`Curve`], at time
-    /// `t` (s).
+    /// The point's state `at` against the plane or the [`Curve`], at time
+    /// `t` (s); with a [`Span`] on a curve, at the segment's point nearest
+    /// the curve's centre or axis.
     fn touch(&self, t: f64, at: &PointState) -> Touch {
+        let dt = t - self.time;
+        let (x, v, arm, along) = self.foot(dt, at);
         let plane = || {
-            let plane = self.point + self.velocity * (t - self.time);
+            let plane = self.point + self.velocity * dt;
             let n = self.normal;
-            Touch { depth: self.radius - (at.point - plane).dot(n), rate: -(at.velocity - self.velocity).dot(n), normal: n, reach: f64::INFINITY }
+            Touch { depth: self.radius - (x - plane).dot(n), rate: -(v - self.velocity).dot(n), normal: n, reach: f64::INFINITY, flat: [None; 2], arm }
         };
         let Some(curve) = self.curve else {
             return plane();
         };
-        let centre = self.point - self.normal * curve.radius + curve.centre_velocity * (t - self.time);
-        let mut d = at.point - centre;
+        let centre = self.point - self.normal * curve.radius + curve.centre_velocity * dt;
+        let mut d = x - centre;
         if let Some(axis) = curve.axis {
             d -= axis * d.dot(axis);
         }
         let reach = d.length();
         // (At the centre or on the axis the direction is lost: the plane.)
-        if reach.is_nan() || reach <= 1e-9 * curve.radius {
+        if reach.is_nan() || reach <= 1e-9 * curve.radius.max(self.radius) {
             return plane();
         }
         let n = d / reach;
-        Touch { depth: self.radius + curve.radius - reach, rate: -(at.velocity - curve.centre_velocity).dot(n), normal: n, reach }
+        Touch { depth: self.radius + curve.radius - reach, rate: -(v - curve.centre_velocity).dot(n), normal: n, reach, flat: [curve.axis, along], arm }
+    }
+
+    /// Where the contact acts, `dt` s after its time: the point itself
+    /// (its position and velocity, world, no arm); with a [`Span`] on a
+    /// [`Curve`], the segment's point nearest the
+    /// curve's centre or axis (position, velocity, its arm from the point,
+    /// all world) and, when that lies inside the segment, the element's
+    /// world axis (along which it then slides).
+    fn foot(&self, dt: f64, at: &PointState) -> (DVec3, DVec3, DVec3, Option<DVec3>) {
+        let (Some(span), Some(curve)) = (self.span, self.curve) else {
+            return (at.point, at.velocity, DVec3::ZERO, None);
+        };
+        let e = at.rotation * span.axis;
+        let w = at.point - (self.point - self.normal * curve.radius + curve.centre_velocity * dt);
+        // The nearest point of the element's line to the axis (the common
+        // perpendicular's foot) or to the centre; the distance is convex
+        // along the line, so the segment's nearest point is it clamped.
+        let u = match curve.axis {
+            Some(a) => {
+                let b = e.dot(a);
+                let square = 1.0 - b * b;
+                if square > 1e-12 {
+                    (b * a.dot(w) - e.dot(w)) / square
+                } else {
+                    0.0
+                }
+            }
+            None => -e.dot(w),
+        };
+        let u = if u.is_finite() { u.clamp(span.lo, span.hi) } else { 0.0 };
+        let arm = e * u;
+        (at.point + arm, at.velocity + at.angular_velocity.cross(arm), arm, (u > span.lo && u < span.hi).then_some(e))
     }
 
     /// The normal force the plane puts on the sphere at time `t` (s), N
@@ -676,22 +753,40 @@ impl ForceElement for SphereContact {
         let (f, k, c) = self.law.force(touch.depth, touch.rate);
         let n = touch.normal;
         let nn = outer3(n, n);
+        // The normal force acts where the contact is ([`Touch::arm`] from
+        // the point: a span's nearest point), with its tangents there.
+        let at_point = |m: DMat3| M6 { d: m, ..M6::default() };
         if f == 0.0 {
             // Outside, or inside and separating (the tangents alone, see
             // `ImpactLaw::force`); no friction without a normal force.
-            let mut w = PointWrench::default();
-            w.stiffness.d = nn * k;
-            w.damping.d = nn * c;
-            return w;
+            return PointWrench { stiffness: at_point(nn * k), damping: at_point(nn * c), arm: touch.arm, ..Default::default() };
         }
-        let mut w = PointWrench { force: n * f, ..Default::default() };
         // f = F_n(δ, δ̇) n with δ = r − (p − p₀)·n, δ̇ = −v·n:
-        // −∂f/∂p = ∂F_n/∂δ n nᵀ, −∂f/∂v = ∂F_n/∂δ̇ n nᵀ.
-        w.stiffness.d = nn * k;
-        w.damping.d = nn * c;
-        if let Some(curve) = self.curve.filter(|_| touch.reach.is_finite()) {
-            let p = curve.axis.map_or(DMat3::IDENTITY, |a| DMat3::IDENTITY - outer3(a, a));
-            w.stiffness.d -= (p - nn) * (f / touch.reach);
+        // −∂f/∂p = ∂F_n/∂δ n nᵀ, −∂f/∂v = ∂F_n/∂δ̇ n nᵀ; on a curve, an
+        // edge or a corner the normal turns with the point:
+        // −(F_n/ρ)(Q − n nᵀ), Q the projection off the directions along
+        // which it does not ([`Touch::flat`]).
+        let mut m = nn * k;
+        if touch.reach.is_finite() {
+            let mut q = DMat3::IDENTITY;
+            let mut kept: Option<DVec3> = None;
+            for a in touch.flat.into_iter().flatten() {
+                let a = kept.map_or(a, |b| (a - b * a.dot(b)).normalize_or_zero());
+                q -= outer3(a, a);
+                kept = Some(a);
+            }
+            m -= (q - nn) * (f / touch.reach);
+        }
+        let mut w = PointWrench { force: n * f, moment: DVec3::ZERO, stiffness: at_point(m), damping: at_point(nn * c), arm: touch.arm };
+        if let Some(e) = touch.flat[1] {
+            // A span's nearest point inside its segment: the distance is the
+            // element's line's from the axis, whose normal turns with the
+            // element, `δn = e (δθ·t)` with `t = n × e`, and which a turn
+            // about the point across `t` shortens, `δρ = −ρ (δθ·t)²/2`.
+            let t = n.cross(e);
+            w.stiffness.a += outer3(t, t) * (f * touch.reach);
+            w.stiffness.b -= outer3(t, e) * f;
+            w.stiffness.c -= outer3(e, t) * f;
         }
         if let (Some(friction), Some(x)) = (self.friction, self.tangential(t, at, n, f)) {
             // Sticking: −∂F_t/∂c = k_t P. Slipping, F_t = μ F_n d̂ with
@@ -701,13 +796,16 @@ impl ForceElement for SphereContact {
             // solve would only take its symmetric part, which is
             // indefinite), so Newton converges linearly while slipping.
             // The turn's tangent is taken at a small turn since the step's
-            // start (the rotation vector's own derivative left out).
+            // start (the rotation vector's own derivative left out). It
+            // acts at its own arm from the point, moved to where the
+            // normal force acts.
             let d = x.direction;
             let tangent = DMat3::IDENTITY - nn - outer3(d, d);
+            let arm = x.arm - touch.arm;
             w.force += x.force;
-            w.moment = x.arm.cross(x.force);
-            w.stiffness += at_arm(x.arm, tangent * (friction.stiffness * x.scale));
-            w.damping += at_arm(x.arm, tangent * (friction.damping * x.scale));
+            w.moment += arm.cross(x.force);
+            w.stiffness += at_arm(arm, tangent * (friction.stiffness * x.scale));
+            w.damping += at_arm(arm, tangent * (friction.damping * x.scale));
         }
         w
     }

@@ -4,7 +4,7 @@ pub mod material;
 pub use self::material::{preset, RopeMaterial, RopeSection, PRESET_NAMES};
 pub mod chain;
 pub mod contact;
-pub use self::contact::{ContactError, CoulombFriction, Curve, ImpactLaw, PairContact, PairFriction, SphereContact};
+pub use self::contact::{ContactError, CoulombFriction, Curve, ImpactLaw, PairContact, PairFriction, Span, SphereContact};
 pub mod force;
 pub use self::force::{AttachedForce, AttachedPair, ForceElement, PairElement, PairSpring, PairWrench, PointSpring, PointState, PointWrench};
 pub mod spatial;

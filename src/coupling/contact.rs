@@ -22,7 +22,8 @@
 
 use super::{BodyMotion, CarriedLink};
 use crate::cable::{
-    AttachedForce, AttachedPair, BaseState, Cable, Chain, ContactError, CoulombFriction, Curve, ImpactLaw, PairContact, PairFriction, PointState, SphereContact,
+    AttachedForce, AttachedPair, BaseState, Cable, Chain, ContactError, CoulombFriction, Curve, ImpactLaw, PairContact, PairFriction, PointState, Span,
+    SphereContact,
 };
 use glam::{DMat3, DVec3};
 use rapier3d::prelude as rp;
@@ -681,6 +682,7 @@ impl<'a> Obstacle<'a> {
             law,
             friction: None,
             curve: None,
+            span: None,
         };
         match round_at(self.collider.shape(), q, normal) {
             Some((r, centre, axis)) => {
@@ -700,6 +702,56 @@ impl<'a> Obstacle<'a> {
             }
             None => contact,
         }
+    }
+
+    /// The contact of a rope element's interior, whose segment through the
+    /// contact's point is `span`, with the surface point `hit` (as
+    /// [`Obstacle::contact`]'s): on a ball, a cylinder's round side or a
+    /// capsule, and on a box's edge or corner ([`Obstacle::edge_curve`]),
+    /// of the segment against the curved surface ([`Span`]), so that it
+    /// acts where the surface is under the element as the rope slides;
+    /// elsewhere (a face) of the point.
+    fn element_contact(&self, hit: (DVec3, DVec3, f64), radius: f64, law: ImpactLaw, span: Span) -> SphereContact {
+        let contact = self.contact(hit, radius, law);
+        if contact.curve.is_some() {
+            return contact.with_span(span);
+        }
+        match self.edge_curve(hit.0) {
+            Some((point, curve)) => SphereContact { point, ..contact }.with_curve(curve).with_span(span),
+            None => contact,
+        }
+    }
+
+    /// The edge or the corner of a box at the surface point `q` (its frame,
+    /// m) as a curve of radius 0 (a line, or a point), and its point
+    /// (world, m). `None` when the obstacle is not a box or `q` is not on
+    /// one of its edges or corners.
+    fn edge_curve(&self, q: DVec3) -> Option<(DVec3, Curve)> {
+        let h = self.collider.shape().as_cuboid()?.half_extents.as_dvec3();
+        // Parry's projection is `f32`: the edge's coordinates snapped to
+        // the box's (the faces within 1e-5 relative and 1 µm).
+        let mut exact = q;
+        let mut along = None;
+        let mut on = 0;
+        for j in 0..3 {
+            if (q[j].abs() - h[j]).abs() <= 1e-5 * h[j] + 1e-6 {
+                exact[j] = h[j].copysign(q[j]);
+                on += 1;
+            } else {
+                along = Some(j);
+            }
+        }
+        let axis = match (on, along) {
+            (2, Some(j)) => {
+                let mut a = DVec3::ZERO;
+                a[j] = 1.0;
+                Some(self.rotation * a)
+            }
+            (3, _) => None,
+            _ => return None,
+        };
+        let point = self.origin + self.rotation * exact;
+        Some((point, Curve { radius: 0.0, axis, centre_velocity: self.surface_velocity(point) }))
     }
 
     /// Velocity of the obstacle's surface at world point `q`, m/s.
@@ -744,6 +796,48 @@ fn round_at(shape: &dyn rp::Shape, q: DVec3, normal: DVec3) -> Option<(f64, DVec
         return on(centre, r).then_some((r, centre, axis));
     }
     None
+}
+
+/// Where the element from `a` to `b` (collider frame, m) comes nearest a
+/// ball, a capsule or the round side of a cylinder: the fraction along the
+/// element of its point nearest the ball's centre or the shape's axis, the
+/// surface point across from it and the outward normal there (collider
+/// frame), the point's distance from the surface (m, negative inside),
+/// and the surface's radius, centre (across from the point) and axis
+/// (`None` on a ball or a capsule's end): all exact in `f64`. `None` for
+/// other shapes, and on a cylinder where that point is beyond its round
+/// side (over a cap or its rim), or on the centre or the axis itself.
+#[allow(clippy::type_complexity)]
+fn round_foot(shape: &dyn rp::Shape, a: DVec3, b: DVec3) -> Option<(f64, DVec3, DVec3, f64, f64, DVec3, Option<DVec3>)> {
+    let (f, radius, centre, axis) = if let Some(ball) = shape.as_ball() {
+        (closest_on_segment(a, b, DVec3::ZERO), f64::from(ball.radius), DVec3::ZERO, None)
+    } else if let Some(capsule) = shape.as_capsule() {
+        let (p, q) = (capsule.segment.a.as_dvec3(), capsule.segment.b.as_dvec3());
+        let (f, g) = closest_on_segments(a, b, p, q);
+        let axis = (g > 0.0 && g < 1.0).then(|| (q - p).normalize()).filter(|x| x.is_finite());
+        (f, f64::from(capsule.radius), p.lerp(q, g), axis)
+    } else if let Some(cylinder) = shape.as_cylinder() {
+        // Nearest the axis (the y axis): the least distance across it
+        // (the middle of an element along it).
+        let (ax, dx) = (DVec3::new(a.x, 0.0, a.z), DVec3::new(b.x - a.x, 0.0, b.z - a.z));
+        let across = dx.length_squared();
+        let f = if across > 1e-300 { (-ax.dot(dx) / across).clamp(0.0, 1.0) } else { 0.5 };
+        let y = a.y + (b.y - a.y) * f;
+        if y.abs() > f64::from(cylinder.half_height) {
+            return None;
+        }
+        (f, f64::from(cylinder.radius), DVec3::new(0.0, y, 0.0), Some(DVec3::Y))
+    } else {
+        return None;
+    };
+    let p = a.lerp(b, f);
+    let mut d = p - centre;
+    if let Some(axis) = axis {
+        d -= axis * d.dot(axis);
+    }
+    let reach = d.length();
+    let n = d / reach;
+    (reach > 1e-9 * radius && n.is_finite()).then(|| (f, centre + n * radius, n, reach - radius, radius, centre, axis))
 }
 
 /// The surface point of `shape` nearest to `p` (collider frame, m), its
@@ -943,15 +1037,42 @@ pub(crate) fn add_contacts(
             let mu = combine(contact.friction, co.friction() as f64, rp::CoefficientCombineRule::Average, co.friction_combine_rule());
             let reach = |i: usize| reach[i] + own_reach;
             let site = |site: usize| Site::Rope { rope, site, obstacle: obstacle.handle };
-            let mut add = |memory: &mut FrictionMemory, at: usize, s: f64, hit, fraction| {
-                let c = memory.note(site(at), obstacle.contact(hit, radius, contact.law), mu, fraction, [obstacle.collider.parent(), None]);
+            let mut add = |memory: &mut FrictionMemory, at: usize, s: f64, element: SphereContact, fraction| {
+                let c = memory.note(site(at), element, mu, fraction, [obstacle.collider.parent(), None]);
                 hits.push((s, c));
+            };
+            // An element's interior at `s` (m) over the surface point
+            // `hit`: the contact of its segment on a curve or a box's edge
+            // or corner ([`Obstacle::element_contact`]).
+            let interior = |s: f64, hit: (DVec3, DVec3, f64)| match cable.rope_point(rope, s) {
+                Some((_, local)) => obstacle.element_contact(hit, radius, contact.law, Span { axis: DVec3::X, lo: -local.x, hi: element_length - local.x }),
+                None => obstacle.contact(hit, radius, contact.law),
             };
             let near = |i: usize| {
                 let (a, b) = (nodes[i], nodes[i + 1]);
                 let pad = DVec3::splat(radius + reach(i));
                 !((a.min(b) - pad).cmpgt(cmax).any() || (a.max(b) + pad).cmplt(cmin).any())
             };
+            // On a ball, a capsule or a cylinder's round side every element
+            // within reach touches as a capsule: its segment against the
+            // curved surface ([`Span`]), wherever it slides or turns within
+            // the step. (With contacts at the nodes and at interiors nearer
+            // than both nodes, found at the step's start, a rope hauled
+            // over a 2 cm bar turned an element onto the bar within a step
+            // with no contact there, and the next step found it inside:
+            // the rope caught on the bar and Newton failed.) Their nodes'
+            // own contacts are left out where an element beside them has
+            // one: the segment's nearest point is the node when that is
+            // nearest.
+            let round: Vec<(usize, (f64, DVec3, DVec3, f64))> = candidates
+                .iter()
+                .filter(|&&i| near(i))
+                .filter_map(|&i| {
+                    let (f, q, normal, gap, ..) = round_foot(co.shape(), obstacle.local(nodes[i]), obstacle.local(nodes[i + 1]))?;
+                    (gap - radius <= reach(i)).then_some((i, (f, q, normal, gap)))
+                })
+                .collect();
+            let spanned = |k: usize| round.iter().any(|&(i, _)| i == k || i + 1 == k);
             // Nodes.
             for k in candidate_nodes.into_iter().filter(|&k| !((k == 0 && held_first) || (k == n && held_last))) {
                 let reach_k = reach(k.min(n.saturating_sub(1))).max(if k > 0 { reach(k - 1) } else { 0.0 });
@@ -972,12 +1093,25 @@ pub(crate) fn add_contacts(
                 if radius - hit.2 > deepest.map_or(0.0, |d| d.depth) {
                     deepest = Some(Deepest { rope, node: k, element: None, point: nodes[k], depth: radius - hit.2 });
                 }
-                if hit.2 - radius <= reach_k {
-                    add(memory, 2 * k, k as f64 * element_length, hit, 0.0);
+                if hit.2 - radius <= reach_k && !(spanned(k) && round_at(co.shape(), hit.0, hit.1).is_some()) {
+                    add(memory, 2 * k, k as f64 * element_length, obstacle.contact(hit, radius, contact.law), 0.0);
                 }
             }
+            for &(i, (f, q, normal, gap)) in &round {
+                let (a, b) = (nodes[i], nodes[i + 1]);
+                if f > 0.02 && f < 0.98 && radius - gap > deepest.map_or(0.0, |d| d.depth) {
+                    let node = if f < 0.5 { i } else { i + 1 };
+                    deepest = Some(Deepest { rope, node, element: Some(i), point: a.lerp(b, f), depth: radius - gap });
+                }
+                // At the material point of the last step while the
+                // nearest point stays within a tenth of the element (the
+                // friction's anchor), else at the nearest point.
+                let f = memory.fraction(site(2 * i + 1), f);
+                let s = (i as f64 + f) * element_length;
+                add(memory, 2 * i + 1, s, interior(s, (q, normal, gap)), f);
+            }
             // Element interiors nearer than both their nodes.
-            for i in candidates.into_iter().filter(|&i| near(i)) {
+            for i in candidates.into_iter().filter(|&i| near(i) && !round.iter().any(|r| r.0 == i)) {
                 let (a, b) = (obstacle.local(nodes[i]), obstacle.local(nodes[i + 1]));
                 let along = (b - a).normalize();
                 let dist = |f: f64| obstacle.nearest_local(a.lerp(b, f)).map_or(f64::INFINITY, |hit| hit.2);
@@ -1000,8 +1134,9 @@ pub(crate) fn add_contacts(
                     // interior, which no node contact holds (a rope
                     // sliding off a plate over its edge went 0.40 mm into
                     // it without this contact, 0.14 mm with it). A contact a little
-                    // in from that node, on the plane through the edge
-                    // square to the element, holds the element's line on
+                    // in from that node, of the element's segment against
+                    // the edge on a box (else on the plane through the
+                    // edge square to the element), holds the element on
                     // the edge wherever it slides.
                     let free = |k: usize| !((k == 0 && held_first) || (k == n && held_last));
                     let (end, k, f, into) = if d0 <= d1 { (a, i, EDGE_FRACTION, along) } else { (b, i + 1, 1.0 - EDGE_FRACTION, -along) };
@@ -1016,7 +1151,8 @@ pub(crate) fn add_contacts(
                             let beside = (q - end).dot(into) > 0.0;
                             if beside && gap - radius <= reach(i) && normal.is_finite() {
                                 let f = memory.fraction(site(2 * i + 1), f).clamp(EDGE_FRACTION, 1.0 - EDGE_FRACTION);
-                                add(memory, 2 * i + 1, (i as f64 + f) * element_length, (q, normal, m.dot(normal)), f);
+                                let s = (i as f64 + f) * element_length;
+                                add(memory, 2 * i + 1, s, interior(s, (q, normal, m.dot(normal))), f);
                             }
                         }
                     }
@@ -1033,17 +1169,20 @@ pub(crate) fn add_contacts(
                 }
                 if f > 0.02 && f < 0.98 && d < ends - 1e-3 * radius && d - radius <= reach(i) {
                     // At an edge (the nearest surface point on an edge or
-                    // a vertex) the plane is the one at the element's
-                    // nearest point now, even where the contact sits at
-                    // the material point of the last step (friction's
-                    // anchor): its normal is then the common perpendicular
-                    // of the element and the edge, square to the element,
-                    // so every point of the element has the same distance
-                    // from it and a rope sliding over the edge is held
-                    // wherever its material point is. (At the material
-                    // point's own nearest surface point the normal tilted
-                    // toward the element: a rope sliding off a plate over
-                    // its edge sank a radius into it within a step.)
+                    // a vertex) the contact is at the element's nearest
+                    // point now, even where it sits at the material point
+                    // of the last step (friction's anchor): on a box, of
+                    // the element's segment against the edge's line or the
+                    // corner ([`Obstacle::element_contact`]: held on the
+                    // edge wherever the rope slides or turns within the
+                    // step); on other shapes, on the plane through the
+                    // edge square to the element (its normal the common
+                    // perpendicular of the element and the edge, so every
+                    // point of the element has the same distance from it).
+                    // (At the material point's own nearest surface point
+                    // the normal tilted toward the element: a rope sliding
+                    // off a plate over its edge sank a radius into it
+                    // within a step.)
                     // Inside the shape the nearest face may not be the one
                     // the element came through: an element sunk a little
                     // near a box's edge has the side face nearest, a plane
@@ -1059,16 +1198,16 @@ pub(crate) fn add_contacts(
                     let steep = |hit: &(DVec3, DVec3, f64)| hit.2 < 0.0 && hit.1.dot(along).abs() > 0.5;
                     let here = obstacle.nearest_local_and_edge(p);
                     let anchored = memory.fraction(site(2 * i + 1), f);
-                    let hit = match here {
-                        Some((hit, _)) if steep(&hit) => Some(obstacle.segment_plane(a, b, p).unwrap_or(hit)),
-                        Some((hit, true)) => Some(hit),
+                    let s = (i as f64 + anchored) * element_length;
+                    let element = match here {
+                        Some((hit, _)) if steep(&hit) => Some(obstacle.contact(obstacle.segment_plane(a, b, p).unwrap_or(hit), radius, contact.law)),
+                        Some((hit, true)) => Some(interior(s, hit)),
                         _ if whole => continue,
-                        _ if anchored != f => obstacle.nearest_local(a.lerp(b, anchored)),
-                        _ => here.map(|(hit, _)| hit),
+                        _ if anchored != f => obstacle.nearest_local(a.lerp(b, anchored)).map(|hit| interior(s, hit)),
+                        _ => here.map(|(hit, _)| interior(s, hit)),
                     };
-                    let f = anchored;
-                    if let Some(hit) = hit {
-                        add(memory, 2 * i + 1, (i as f64 + f) * element_length, hit, f);
+                    if let Some(element) = element {
+                        add(memory, 2 * i + 1, s, element, anchored);
                     }
                 }
             }

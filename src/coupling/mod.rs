@@ -435,7 +435,10 @@ impl CoupledCable {
     fn obstacle_wrench(&self, body: rp::RigidBodyHandle, about: DVec3) -> (DVec3, DVec3) {
         let ch = &self.cable.model.chain;
         let t = self.cable.time();
-        let contacts = ch.forces().iter().zip(ch.force_element_points()).skip(self.fixed_forces).map(|(f, at)| (at.point, f.element.wrench(t, &at).force));
+        let contacts = ch.forces().iter().zip(ch.force_element_points()).skip(self.fixed_forces).map(|(f, at)| {
+            let w = f.element.wrench(t, &at);
+            (at.point + w.arm, w.force)
+        });
         self.friction.wrench_on_obstacle(body, contacts, about)
     }
 

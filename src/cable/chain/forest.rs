@@ -14,7 +14,7 @@
 use super::sweep::{point_state, PairScratch};
 use super::Chain;
 use crate::cable::force::{PairElement, PointWrench};
-use crate::cable::spatial::{M6, V6};
+use crate::cable::spatial::V6;
 use crate::integrate::{SecondOrderSystem, SystemError};
 use glam::{DMat3, DVec3};
 use std::sync::Arc;
@@ -318,8 +318,7 @@ impl<'a> Forest<'a> {
             let w = p.element.wrench(t, &at_a, &at_b);
             // (The pair's stiffness and damping are the loop correction's.)
             let contact = p.element.contact_force(t, &at_a, &at_b);
-            let half =
-                |link, p, force| ExternalPoint { link, p, wrench: PointWrench { force, moment: DVec3::ZERO, stiffness: M6::ZERO, damping: M6::ZERO }, contact };
+            let half = |link, p, force| ExternalPoint { link, p, wrench: PointWrench { force, ..PointWrench::default() }, contact };
             self.chains[p.chain_a].external[sa] = half(p.link_a, pa, w.force);
             self.chains[p.chain_b].external[sb] = half(p.link_b, pb, -w.force);
             self.loops.push(LoopPair {

@@ -363,7 +363,7 @@ impl Chain {
             let (at_b, pb) = point_state(&self.poses[pr.link_b], self.origin, pr.point_b);
             let w = pr.element.wrench(t, &at_a, &at_b);
             for (link, p, force) in [(pr.link_a, pa, w.force), (pr.link_b, pb, -w.force)] {
-                let point = PointWrench { force, moment: DVec3::ZERO, stiffness: M6::ZERO, damping: M6::ZERO };
+                let point = PointWrench { force, ..PointWrench::default() };
                 add_point_wrench(&mut self.links[self.link_slot[link] as usize], &mut self.anchor_blocks, p, &point);
             }
             self.pair_scratch.push(PairScratch { link_a: pr.link_a, link_b: pr.link_b, pa, pb, stiffness: w.stiffness, damping: w.damping, normal: w.normal });
@@ -929,7 +929,8 @@ pub(super) fn apply_force_element(
     element: &dyn ForceElement,
 ) {
     let (at, p) = point_state(ps, origin, local_point);
-    add_point_wrench(ls, blocks, p, &element.wrench(t, &at));
+    let w = element.wrench(t, &at);
+    add_point_wrench(ls, blocks, p + w.arm, &w);
 }
 
 /// Adds the wrench `w` at the point `p` (relative to the chain's origin)
