@@ -226,13 +226,15 @@ pub struct SphereContact {
 /// `lo` to `hi` (m, `lo ≤ 0 ≤ hi`) along the link's unit `axis` (link
 /// frame) from the point. Against a [`Curve`] the contact is then at the
 /// segment's point nearest the ball's centre or the cylinder's axis,
-/// found again at every evaluation, and its force acts there (with its
-/// moment about the point): an element sliding over a box's edge (a
+/// found again at every evaluation, and its force acts there
+/// ([`PointWrench::arm`]): an element sliding over a box's edge (a
 /// cylinder of radius 0) is held where the edge is under it now, not at
 /// the material point that was over the edge at the step's start, whose
 /// plane (square to the element then) let the element turn about that
 /// point into the edge within the step (docs/architecture.md, "Sharp
-/// edges"). Against a plane the point itself.
+/// edges and thin bars"). Its tangents are exact where the element
+/// crosses the axis square (a rope over an edge, a bar or a drum) or
+/// against a point. Against a plane the point itself.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Span {
     /// The element's unit axis, link frame.

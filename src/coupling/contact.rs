@@ -1084,7 +1084,13 @@ pub(crate) fn add_contacts(
                     (gap - radius <= reach(i)).then_some((i, (f, q, normal, gap)))
                 })
                 .collect();
-            let spanned = |k: usize| round.iter().any(|&(i, _)| i == k || i + 1 == k);
+            // Which elements have one (by index; empty off round shapes).
+            let mut touching = vec![false; if round.is_empty() { 0 } else { n }];
+            for &(i, _) in &round {
+                touching[i] = true;
+            }
+            let has_span = |i: usize| touching.get(i).copied().unwrap_or(false);
+            let spanned = |k: usize| has_span(k) || (k > 0 && has_span(k - 1));
             // Nodes.
             for k in candidate_nodes.into_iter().filter(|&k| !((k == 0 && held_first) || (k == n && held_last))) {
                 let reach_k = reach(k.min(n.saturating_sub(1))).max(if k > 0 { reach(k - 1) } else { 0.0 });
@@ -1123,7 +1129,7 @@ pub(crate) fn add_contacts(
                 add(memory, 2 * i + 1, s, interior(s, (q, normal, gap)), f);
             }
             // Element interiors nearer than both their nodes.
-            for i in candidates.into_iter().filter(|&i| near(i) && !round.iter().any(|r| r.0 == i)) {
+            for i in candidates.into_iter().filter(|&i| near(i) && !has_span(i)) {
                 let (a, b) = (obstacle.local(nodes[i]), obstacle.local(nodes[i + 1]));
                 let along = (b - a).normalize();
                 let dist = |f: f64| obstacle.nearest_local(a.lerp(b, f)).map_or(f64::INFINITY, |hit| hit.2);
