@@ -814,13 +814,11 @@ fn round_at(shape: &dyn rp::Shape, q: DVec3, normal: DVec3) -> Option<(f64, DVec
 /// ball, a capsule or the round side of a cylinder: the fraction along the
 /// element of its point nearest the ball's centre or the shape's axis, the
 /// surface point across from it and the outward normal there (collider
-/// frame), the point's distance from the surface (m, negative inside),
-/// and the surface's radius, centre (across from the point) and axis
-/// (`None` on a ball or a capsule's end): all exact in `f64`. `None` for
-/// other shapes, and on a cylinder where that point is beyond its round
-/// side (over a cap or its rim), or on the centre or the axis itself.
-#[allow(clippy::type_complexity)]
-fn round_foot(shape: &dyn rp::Shape, a: DVec3, b: DVec3) -> Option<(f64, DVec3, DVec3, f64, f64, DVec3, Option<DVec3>)> {
+/// frame), and the point's distance from the surface (m, negative
+/// inside), all exact in `f64`. `None` for other shapes, and on a
+/// cylinder where that point is beyond its round side (over a cap or its
+/// rim), or on the centre or the axis itself.
+fn round_foot(shape: &dyn rp::Shape, a: DVec3, b: DVec3) -> Option<(f64, DVec3, DVec3, f64)> {
     let (f, radius, centre, axis) = if let Some(ball) = shape.as_ball() {
         (closest_on_segment(a, b, DVec3::ZERO), f64::from(ball.radius), DVec3::ZERO, None)
     } else if let Some(capsule) = shape.as_capsule() {
@@ -849,7 +847,7 @@ fn round_foot(shape: &dyn rp::Shape, a: DVec3, b: DVec3) -> Option<(f64, DVec3, 
     }
     let reach = d.length();
     let n = d / reach;
-    (reach > 1e-9 * radius && n.is_finite()).then(|| (f, centre + n * radius, n, reach - radius, radius, centre, axis))
+    (reach > 1e-9 * radius && n.is_finite()).then(|| (f, centre + n * radius, n, reach - radius))
 }
 
 /// The surface point of `shape` nearest to `p` (collider frame, m), its
@@ -1075,13 +1073,15 @@ pub(crate) fn add_contacts(
             // the rope caught on the bar and Newton failed.) Their nodes'
             // own contacts are left out where an element beside them has
             // one: the segment's nearest point is the node when that is
-            // nearest.
+            // nearest. (Not at a held end, as there: an element whose
+            // nearest point is its fastened node gets none.)
             let round: Vec<(usize, (f64, DVec3, DVec3, f64))> = candidates
                 .iter()
                 .filter(|&&i| near(i))
                 .filter_map(|&i| {
-                    let (f, q, normal, gap, ..) = round_foot(co.shape(), obstacle.local(nodes[i]), obstacle.local(nodes[i + 1]))?;
-                    (gap - radius <= reach(i)).then_some((i, (f, q, normal, gap)))
+                    let (f, q, normal, gap) = round_foot(co.shape(), obstacle.local(nodes[i]), obstacle.local(nodes[i + 1]))?;
+                    let fastened = (i == 0 && held_first && f <= 0.0) || (i + 1 == n && held_last && f >= 1.0);
+                    (gap - radius <= reach(i) && !fastened).then_some((i, (f, q, normal, gap)))
                 })
                 .collect();
             // Which elements have one (by index; empty off round shapes).
