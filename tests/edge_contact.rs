@@ -318,7 +318,7 @@ fn a_rope_springing_onto_a_drum_from_rest_is_caught_by_its_contacts() {
 /// no friction the hauling run's tension is the load's weight with the
 /// rope below the edge, `(m + ρ ℓ) g` (ℓ from the ball's height), which
 /// its mean over the haul (3.5–8 s) must meet within 1 % (measured
-/// +0.80 % over the edge, +0.47 % over the bar: the rope's bending
+/// +0.75 % over the edge, +0.47 % over the bar: the rope's bending
 /// damping as it bends over the edge and straightens, about twice as much
 /// at damping 0.01 s; the frames swing by −36 % to +42 % with the ball's
 /// pendulum and the rope's own modes, started by the settling).

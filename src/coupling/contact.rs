@@ -850,6 +850,27 @@ fn round_foot(shape: &dyn rp::Shape, a: DVec3, b: DVec3) -> Option<(f64, DVec3, 
     (reach > 1e-9 * radius && n.is_finite()).then(|| (f, centre + n * radius, n, reach - radius))
 }
 
+/// Where the element from `a` to `b` (a box's frame, m) comes nearest the
+/// box of half extents `h`, when that is on one of its edges or corners:
+/// the fraction along the element, the point of the edge or the corner
+/// (its coordinates on the faces exact), the unit normal from it to the
+/// element's point, and that point's distance (m). The distance to a box
+/// is convex along the element; its minimum by ternary search, in `f64`.
+/// `None` when the nearest point is on a face or the element is inside.
+fn box_edge_foot(h: DVec3, a: DVec3, b: DVec3) -> Option<(f64, DVec3, DVec3, f64)> {
+    let dist = |f: f64| {
+        let p = a.lerp(b, f);
+        (p - p.clamp(-h, h)).length()
+    };
+    let f = convex_min(dist, 0.0, 1.0, 40);
+    let p = a.lerp(b, f);
+    let q = p.clamp(-h, h);
+    let d = p - q;
+    let outside = d.cmpne(DVec3::ZERO).bitmask().count_ones();
+    let gap = d.length();
+    (outside >= 2 && gap > 0.0).then(|| (f, q, d / gap, gap))
+}
+
 /// The surface point of `shape` nearest to `p` (collider frame, m), its
 /// outward unit normal there, and the signed distance of `p` along it
 /// (negative inside). A face's normal is its own (a cuboid's face normal
@@ -1066,7 +1087,11 @@ pub(crate) fn add_contacts(
             // On a ball, a capsule or a cylinder's round side every element
             // within reach touches as a capsule: its segment against the
             // curved surface ([`Span`]), wherever it slides or turns within
-            // the step. (With contacts at the nodes and at interiors nearer
+            // the step; on a box, every element whose nearest point is on
+            // an edge or a corner, against that edge's line or the corner
+            // (`box_edge_foot`: the square beam's Atwood machine took 43
+            // Newton iterations per step with the nodes' edge planes, 32
+            // with these). (With contacts at the nodes and at interiors nearer
             // than both nodes, found at the step's start, a rope hauled
             // over a 2 cm bar turned an element onto the bar within a step
             // with no contact there, and the next step found it inside:
@@ -1075,18 +1100,22 @@ pub(crate) fn add_contacts(
             // one: the segment's nearest point is the node when that is
             // nearest. (Not at a held end, as there: an element whose
             // nearest point is its fastened node gets none.)
-            let round: Vec<(usize, (f64, DVec3, DVec3, f64))> = candidates
+            let spans: Vec<(usize, (f64, DVec3, DVec3, f64))> = candidates
                 .iter()
                 .filter(|&&i| near(i))
                 .filter_map(|&i| {
-                    let (f, q, normal, gap) = round_foot(co.shape(), obstacle.local(nodes[i]), obstacle.local(nodes[i + 1]))?;
+                    let (a, b) = (obstacle.local(nodes[i]), obstacle.local(nodes[i + 1]));
+                    let (f, q, normal, gap) = match co.shape().as_cuboid() {
+                        Some(c) => box_edge_foot(c.half_extents.as_dvec3(), a, b),
+                        None => round_foot(co.shape(), a, b),
+                    }?;
                     let fastened = (i == 0 && held_first && f <= 0.0) || (i + 1 == n && held_last && f >= 1.0);
                     (gap - radius <= reach(i) && !fastened).then_some((i, (f, q, normal, gap)))
                 })
                 .collect();
-            // Which elements have one (by index; empty off round shapes).
-            let mut touching = vec![false; if round.is_empty() { 0 } else { n }];
-            for &(i, _) in &round {
+            // Which elements have one (by index; empty if none).
+            let mut touching = vec![false; if spans.is_empty() { 0 } else { n }];
+            for &(i, _) in &spans {
                 touching[i] = true;
             }
             let has_span = |i: usize| touching.get(i).copied().unwrap_or(false);
@@ -1111,11 +1140,11 @@ pub(crate) fn add_contacts(
                 if radius - hit.2 > deepest.map_or(0.0, |d| d.depth) {
                     deepest = Some(Deepest { rope, node: k, element: None, point: nodes[k], depth: radius - hit.2 });
                 }
-                if hit.2 - radius <= reach_k && !(spanned(k) && round_at(co.shape(), hit.0, hit.1).is_some()) {
+                if hit.2 - radius <= reach_k && !(spanned(k) && (round_at(co.shape(), hit.0, hit.1).is_some() || obstacle.edge_curve(hit.0).is_some())) {
                     add(memory, 2 * k, k as f64 * element_length, obstacle.contact(hit, radius, contact.law), 0.0);
                 }
             }
-            for &(i, (f, q, normal, gap)) in &round {
+            for &(i, (f, q, normal, gap)) in &spans {
                 let (a, b) = (nodes[i], nodes[i + 1]);
                 if f > 0.02 && f < 0.98 && radius - gap > deepest.map_or(0.0, |d| d.depth) {
                     let node = if f < 0.5 { i } else { i + 1 };
