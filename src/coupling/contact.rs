@@ -858,6 +858,14 @@ fn round_foot(shape: &dyn rp::Shape, a: DVec3, b: DVec3) -> Option<(f64, DVec3, 
 /// is convex along the element; its minimum by ternary search, in `f64`.
 /// `None` when the nearest point is on a face or the element is inside.
 fn box_edge_foot(h: DVec3, a: DVec3, b: DVec3) -> Option<(f64, DVec3, DVec3, f64)> {
+    // Both ends over the same face (its slab, the only coordinate beyond
+    // the box): so is the whole element, nearest that face. (A rope lying
+    // on the ground, every element, skips the search.)
+    let over = |p: DVec3| p.abs().cmpgt(h).bitmask();
+    let (oa, ob) = (over(a), over(b));
+    if oa == ob && oa.count_ones() == 1 && (a * b).cmpgt(DVec3::ZERO).bitmask() & oa == oa {
+        return None;
+    }
     let dist = |f: f64| {
         let p = a.lerp(b, f);
         (p - p.clamp(-h, h)).length()
