@@ -496,7 +496,7 @@ impl SphereContact {
         let Some(curve) = self.curve else {
             return plane();
         };
-        let centre = self.point - self.normal * curve.radius + curve.centre_velocity * dt;
+        let centre = self.centre(&curve, dt);
         let mut d = x - centre;
         if let Some(axis) = curve.axis {
             d -= axis * d.dot(axis);
@@ -510,6 +510,13 @@ impl SphereContact {
         Touch { depth: self.radius + curve.radius - reach, rate: -(v - curve.centre_velocity).dot(n), normal: n, reach, flat: [curve.axis, along], arm }
     }
 
+    /// The centre of `curve` (a point of its axis), `radius` inside the
+    /// contact's plane at its point, `dt` s after the contact's time,
+    /// world, m.
+    fn centre(&self, curve: &Curve, dt: f64) -> DVec3 {
+        self.point - self.normal * curve.radius + curve.centre_velocity * dt
+    }
+
     /// Where the contact acts, `dt` s after its time: the point itself
     /// (its position and velocity, world, no arm); with a [`Span`] on a
     /// [`Curve`], the segment's point nearest the
@@ -521,7 +528,7 @@ impl SphereContact {
             return (at.point, at.velocity, DVec3::ZERO, None);
         };
         let e = at.rotation * span.axis;
-        let w = at.point - (self.point - self.normal * curve.radius + curve.centre_velocity * dt);
+        let w = at.point - self.centre(&curve, dt);
         // The nearest point of the element's line to the axis (the common
         // perpendicular's foot) or to the centre; the distance is convex
         // along the line, so the segment's nearest point is it clamped.
