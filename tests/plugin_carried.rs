@@ -804,3 +804,188 @@ fn a_car_driven_by_velocity_writes_tows_its_trailer_at_the_friction_tension() {
     );
     assert!((speed / 2.0 - 1.0).abs() < 0.1, "trailer speed {speed}");
 }
+
+/// A 20 kg ball dropped 1.3 m onto the middle of a 10 kg plank hung from
+/// two taut ropes (a V: 2 m up and 2.5 m out from each end; light, EA
+/// 2 MN: their sag's softening (Irvine's `(wL)² EA / 12 T³`) is 3 %).
+/// * The strike is rapier's (its restitution, 0 here), weighed with the
+///   mass the plank has through the ropes over the step (the implicit
+///   step's `m + h² k`, `k = 2 (EA/L) sin²θ` the ropes' vertical
+///   stiffness, `w_c = 1/(m + h² k)`): the ball keeps `v w_c / (w_c +
+///   1/m_b)` of its closing speed `v`, 0.6 m/s of 5.2. (Rapier alone, as
+///   against a free plank: `v (1/m_p) / (1/m_p + 1/m_b)`, two thirds.)
+/// * Then the ball rests on the plank inside the cable's solve
+///   (`contact::carried_pairs`): over 4 s its overlap with the plank
+///   grows by under 2 mm past what rapier's first frame left (5 cm, the
+///   ball falling 8 cm a frame into a plank rapier had not yet met; rapier
+///   leaves the same against a fixed plank, and pushes it out over 30
+///   frames), the ball stays on the plank, and over the last 4 s the
+///   ropes' impulse on the plank less both weights' is the change of the
+///   two bodies' momentum (Newton's second law) to 1 % of the weights'
+///   impulse (the ropes' pull read at their last elements). Before
+///   2026-11-29 rapier's contact, one step late and as against a free
+///   plank, let the ball sink 11 cm into the plank (and a 60 kg one
+///   through it).
+#[test]
+fn a_ball_dropped_on_a_plank_on_taut_ropes_meets_the_ropes_stiffness_and_rests_on_it() {
+    let (mp, mb) = (10.0f32, 20.0f32);
+    let mut app = app();
+    let section = RopeSection { linear_density: 0.01, ea: 2e6, ei: 1e-3, ei2: 1e-3, gj: 1e-3, min_breaking_load: 0.0 };
+    let w = app.world_mut();
+    let half = Vec3::new(0.5, 0.03, 0.3);
+    let plank =
+        w.spawn((RigidBody::Dynamic, Transform::IDENTITY, Collider::cuboid(half.x, half.y, half.z), ColliderMassProperties::Mass(mp), Velocity::zero())).id();
+    let (top, at) = (Vec3::new(3.0, 2.0, 0.0), Vec3::new(0.5, 0.03, 0.0));
+    let length = (top - at).length();
+    let mut ropes = Vec::new();
+    for side in [-1.0f32, 1.0] {
+        let (top, at) = (top * Vec3::new(side, 1.0, 1.0), at * Vec3::new(side, 1.0, 1.0));
+        ropes.push(
+            w.spawn(
+                CableDescriptor::new(length)
+                    .material(RopeMaterial::custom(section, 0.012))
+                    .start(CableAnchor::world(top))
+                    .end(CableAnchor::body(plank, at))
+                    .path([top, at]),
+            )
+            .id(),
+        );
+    }
+    let ball = w.spawn((RigidBody::Dynamic, Transform::from_xyz(0.0, 1.5, 0.0), Collider::ball(0.2), ColliderMassProperties::Mass(mb), Velocity::zero())).id();
+    let (l, sin) = (length as f64, ((top.y - at.y) / length) as f64);
+    let tension = mp as f64 * G / (2.0 * sin);
+    let sag = (section.linear_density * G * l).powi(2) * section.ea / (12.0 * tension.powi(3));
+    let k = 2.0 * section.ea / l * sin * sin / (1.0 + sag);
+    let h = DT as f64;
+    let w_c = 1.0 / (mp as f64 + h * h * k);
+    let w_b = 1.0 / mb as f64;
+    // The ball's surface from the plank's (signed, m).
+    let gap = |app: &App| {
+        let p = app.world().get::<Transform>(plank).unwrap();
+        let q = (p.rotation.inverse() * (app.world().get::<Transform>(ball).unwrap().translation - p.translation)).abs() - half;
+        (q.max(Vec3::ZERO).length() + q.max_element().min(0.0) - 0.2) as f64
+    };
+    let vy = |app: &App, e: Entity| app.world().get::<Velocity>(e).unwrap().linear.y as f64;
+    let (mut before, mut struck, mut deepest, mut pull, mut momentum_at_60) = (0.0, None, 0.0f64, Vec::new(), 0.0);
+    for frame in 0..300 {
+        app.update();
+        let v = vy(&app, ball);
+        if struck.is_none() && v > before + 0.5 {
+            // The ball's speed at the strike: as it fell on, one more
+            // step of gravity.
+            let closing = before - G * h - vy(&app, plank);
+            let expected = closing * w_c / (w_c + w_b);
+            let free = closing * (1.0 / mp as f64) / (1.0 / mp as f64 + w_b);
+            println!("strike at frame {frame}: ball {before:.3} -> {v:.3} m/s; the ropes' stiffness gives {expected:.3}, a free plank {free:.3}");
+            assert!((v / expected - 1.0).abs() < 0.05, "the ball keeps {v:.3} m/s, the ropes' stiffness gives {expected:.3}");
+            struck = Some(gap(&app));
+        }
+        if let Some(depth) = struck {
+            deepest = deepest.max(depth - gap(&app));
+            if frame < 60 || frame % 20 == 0 {
+                println!("frame {frame}: gap {:.4} ball v {:.3} plank v {:.3}", gap(&app), vy(&app, ball), vy(&app, plank));
+            }
+        }
+        if frame == 59 {
+            momentum_at_60 = mb as f64 * vy(&app, ball) + mp as f64 * vy(&app, plank);
+        }
+        if frame >= 60 {
+            pull.push(
+                ropes
+                    .iter()
+                    .map(|&r| {
+                        let s = app.world().get::<CableState>(r).unwrap();
+                        let (n, m) = (s.nodes.len(), s.tensions.len());
+                        (s.tensions[m - 1] * (s.nodes[n - 2] - s.nodes[n - 1]).normalize().y) as f64
+                    })
+                    .sum::<f64>(),
+            );
+        }
+        before = v;
+    }
+    let depth = struck.expect("the ball never struck the plank");
+    // Newton's second law for the ball and the plank over those frames:
+    // the ropes' impulse less the weights' is their momentum's change.
+    let carried = pull.iter().sum::<f64>() / pull.len() as f64;
+    let momentum_change = mb as f64 * vy(&app, ball) + mp as f64 * vy(&app, plank) - momentum_at_60;
+    let weight = (mp + mb) as f64 * G;
+    let p = app.world().get::<Transform>(ball).unwrap().translation - app.world().get::<Transform>(plank).unwrap().translation;
+    let balance = (carried - weight) * h * pull.len() as f64 - momentum_change;
+    println!(
+        "overlap at the strike {:.4} m, at most {deepest:.5} m more; ball at ({:.3}, {:.3}) from the plank; ropes' mean pull {carried:.1} N against {weight:.1} N; impulse balance {balance:+.3} N·s of {:.1}",
+        -depth,
+        p.x,
+        p.y,
+        weight * h * pull.len() as f64
+    );
+    assert!(deepest < 0.002, "the ball sank {deepest} m further into the plank");
+    assert!(p.y > half.y && p.x.abs() < half.x, "the ball left the plank: ({}, {}) from it", p.x, p.y);
+    assert!(balance.abs() < 0.01 * weight * h * pull.len() as f64, "the ropes' impulse less the weights' is {balance} N·s off the momentum's change");
+    assert!(plugin_app::cable_errors(&mut app).is_empty());
+}
+
+/// A crane lifts a 50 kg pallet on a four-leg sling of 12 mm steel rope
+/// (damped, 0.01 s) with a 100 kg crate standing on it off-centre: the
+/// hook, a velocity-based kinematic body, snatches up to 0.5 m/s at 1 s
+/// and stops dead at 4 s. The crate rides on the pallet: in the pallet's
+/// frame it never sinks into it or slides on it by more than 2 mm, and
+/// 1.5 s after the stop it stands where it stood. (When the hook stops,
+/// the slings go slack, then catch the pallet and pull it from under the
+/// crate, which hops 1.6 cm.) Before 2026-11-29 rapier met the pallet
+/// as a free 50 kg body one step behind the cable: the crate sank 17 cm
+/// into the pallet while it was lifted, and ended 29 cm from where it
+/// stood.
+#[test]
+fn a_crate_on_a_pallet_lifted_on_a_four_leg_sling_rides_on_it() {
+    let mut app = app();
+    let w = app.world_mut();
+    w.spawn((RigidBody::Fixed, Transform::from_xyz(0.0, -0.5, 0.0), Collider::cuboid(20.0, 0.5, 20.0)));
+    let hook = w.spawn((RigidBody::KinematicVelocityBased, Transform::from_xyz(0.0, 5.0, 0.0), Collider::ball(0.1), Velocity::zero())).id();
+    let pallet = w
+        .spawn((
+            RigidBody::Dynamic,
+            Transform::from_xyz(0.0, 0.05, 0.0),
+            Collider::cuboid(0.6, 0.05, 0.6),
+            ColliderMassProperties::Mass(50.0),
+            Velocity::zero(),
+        ))
+        .id();
+    let start = Vec3::new(0.1, 0.25, 0.0);
+    let load = w
+        .spawn((
+            RigidBody::Dynamic,
+            Transform::from_translation(start + Vec3::Y * 0.05),
+            Collider::cuboid(0.2, 0.2, 0.2),
+            ColliderMassProperties::Mass(100.0),
+            Velocity::zero(),
+        ))
+        .id();
+    for (x, z) in [(-0.6f32, -0.6f32), (0.6, -0.6), (0.6, 0.6), (-0.6, 0.6)] {
+        let at = Vec3::new(x, 0.1, z);
+        let top = Vec3::new(0.0, 5.0, 0.0);
+        let sling = CableDescriptor::new((top - at).length()).material(RopeMaterial::steel_6x36_iwrc(0.012)).damping(0.01).path([top, at]);
+        w.spawn(sling.start(CableAnchor::body(hook, Vec3::ZERO)).end(CableAnchor::body(pallet, Vec3::new(x, 0.05, z))));
+    }
+    let (mut off, mut hop, mut end) = (0.0f32, 0.0f32, Vec3::ZERO);
+    for frame in 0..330 {
+        if frame == 60 || frame == 240 {
+            app.world_mut().get_mut::<Velocity>(hook).unwrap().linear = Vec3::Y * if frame == 60 { 0.5 } else { 0.0 };
+        }
+        app.update();
+        let p = app.world().get::<Transform>(pallet).unwrap();
+        let d = p.rotation.inverse() * (app.world().get::<Transform>(load).unwrap().translation - p.translation) - start;
+        off = off.max(Vec3::new(d.x, d.y.min(0.0), d.z).length());
+        hop = hop.max(d.y);
+        end = d;
+    }
+    let p = app.world().get::<Transform>(pallet).unwrap().translation;
+    println!(
+        "pallet lifted to {:.3} m; the crate at most {off:.5} m into or across the pallet, {hop:.4} m off it; at the end {:.5} m from where it stood",
+        p.y,
+        end.length()
+    );
+    assert!(p.y > 1.45, "the pallet was not lifted: {}", p.y);
+    assert!(off < 0.002, "the crate moved {off} m into or across the pallet");
+    assert!(end.length() < 0.002, "the crate ends {} m from where it stood", end.length());
+    assert!(plugin_app::cable_errors(&mut app).is_empty());
+}

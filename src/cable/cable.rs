@@ -895,6 +895,36 @@ impl Cable {
     /// non-finite impulse or `h`, or an unknown link, is an error that
     /// changes nothing.
     pub fn apply_impulse(&mut self, link: usize, point: DVec3, impulse: DVec3, angular: DVec3, h: f64) -> Result<(), CableError> {
+        let Some((_, dv)) = self.impulse_response(link, point, impulse, angular, h)? else {
+            return Ok(());
+        };
+        let v = self.state.v.iter().zip(&dv).map(|(v, d)| v + d).collect();
+        self.take_rates(v, true)
+    }
+
+    /// How fast the point `point` of link `link` (link frame, m) moves
+    /// along the unit vector `direction` (world) per unit impulse along it,
+    /// m/(N·s) = 1/kg: the jump [`Cable::apply_impulse`] would give it with
+    /// the same `h` (s), `dᵀ J (M + h C + h² K)⁻¹ Jᵀ d`. The inverse of the
+    /// mass a body striking that point meets: a payload's own `1/m` when
+    /// the rope is slack, far less when taut ropes hold the point along
+    /// `direction`. Nothing changes. A non-finite input, an unknown link or
+    /// a zero direction is an error.
+    pub fn point_mobility(&mut self, link: usize, point: DVec3, direction: DVec3, h: f64) -> Result<f64, CableError> {
+        let d = direction.normalize_or_zero();
+        if d == DVec3::ZERO {
+            return Err(CableError::Velocity { link, reason: "zero or non-finite direction".into() });
+        }
+        let (rhs, dv) = self.impulse_response(link, point, d, DVec3::ZERO, h)?.expect("a non-zero impulse");
+        // (The power of the unit impulse on the jump: `Jᵀ d` is `rhs`.)
+        Ok(rhs.iter().zip(&dv).map(|(r, v)| r * v).sum())
+    }
+
+    /// The generalized impulse `Jᵀ (L + r × P, P)` of an impulse at a link
+    /// point and the jump in the rates it gives over `h`
+    /// ([`Cable::apply_impulse`]); `None` for a zero impulse.
+    #[allow(clippy::type_complexity)]
+    fn impulse_response(&mut self, link: usize, point: DVec3, impulse: DVec3, angular: DVec3, h: f64) -> Result<Option<(Vec<f64>, Vec<f64>)>, CableError> {
         let n = self.state.q.len();
         let bad = |reason: &str| Err(CableError::Velocity { link, reason: reason.into() });
         if link >= n {
@@ -904,7 +934,7 @@ impl Cable {
             return bad("non-finite impulse or negative time");
         }
         if impulse == DVec3::ZERO && angular == DVec3::ZERO {
-            return Ok(());
+            return Ok(None);
         }
         let t = self.state.t;
         let system = |source| CableError::Integrate(IntegrateError::System { t, source });
@@ -926,8 +956,7 @@ impl Cable {
         if !dv.iter().all(|x| x.is_finite()) {
             return bad("the impulse gives no finite rates");
         }
-        let v = self.state.v.iter().zip(&dv).map(|(v, d)| v + d).collect();
-        self.take_rates(v, true)
+        Ok(Some((rhs, dv)))
     }
 
     /// Adds a distributed load: `load(element, midpoint, midpoint velocity)`

@@ -2329,6 +2329,151 @@ impl<'a> BodyShapes<'a> {
     }
 }
 
+/// Contacts between the bodies a cable carries and a free body (a crate
+/// resting on a payload, a ball on a plank hung on ropes), as pairs solved
+/// in the cable's island with the free body's own chain (`chain_a` the
+/// cable, `chain_b`/`link_b` the free body at pose `(origin, rotation)`
+/// moving at up to `speed` m/s): each touch point ([`touch_points`]) of
+/// the free body's colliders within the speculative reach over `h` s of
+/// a carried body's collider, against its nearest surface point, and each
+/// of the carried body's touch points against the free body's colliders;
+/// steel on steel ([`body_law`], the lighter body's mass), the colliders'
+/// combined friction. A carried body that the free body strikes (one of
+/// its touch points closing faster than `strike`'s speed, m/s, unless the
+/// island held the two together at the last step, `strike`'s list; the
+/// step's start gives two frame steps of gravity, its passes `None`) is
+/// left to rapier, whose restitution the strike keeps
+/// (`reweigh_strikes`), as are the carried bodies in `leave` (struck at
+/// the step's start). Rapier meets a carried body as a free body of its
+/// own mass, one step behind the cable: a 20 kg ball resting on a 10 kg
+/// plank hung on two steel ropes sank 11 cm into it, and a 60 kg ball
+/// went through (2026-11-29). Returns the pairs and how fast they may
+/// close (m/s), and the carried bodies touched.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn carried_pairs(
+    cable: &Cable,
+    carried: &[CarriedLink],
+    chain_a: usize,
+    (bodies, colliders): (&rp::RigidBodySet, &rp::ColliderSet),
+    (free_mass, shapes): (f64, &BodyShapes<'_>),
+    (origin, rotation): (DVec3, DMat3),
+    (velocity, angular_velocity, com): (DVec3, DVec3, DVec3),
+    speed: f64,
+    (chain_b, link_b): (usize, usize),
+    (h, strike): (f64, Option<(f64, &[rp::RigidBodyHandle])>),
+    leave: &[rp::RigidBodyHandle],
+) -> CarriedPairs {
+    let gravity = cable.model.chain.gravity.length();
+    let mut pairs = Vec::new();
+    let (mut touched, mut struck) = (Vec::new(), Vec::new());
+    let mut approach = 0.0f64;
+    let aabb = |collider: &rp::Collider, o: DVec3, r: DMat3| {
+        let pose = rp::Pose::from_parts(o.as_vec3(), glam::DQuat::from_mat3(&r).normalize().as_quat());
+        let b = collider.shape().compute_aabb(&pose);
+        (b.mins.as_dvec3(), b.maxs.as_dvec3())
+    };
+    // (collider, its pose in the world, its box)
+    fn placed<'c>(
+        list: &BodyShapes<'c>,
+        o: DVec3,
+        r: DMat3,
+        aabb: impl Fn(&rp::Collider, DVec3, DMat3) -> (DVec3, DVec3),
+    ) -> Vec<(&'c rp::Collider, DVec3, DMat3, (DVec3, DVec3))> {
+        list.colliders.iter().map(|&(c, lt, lr)| (c, o + r * lt, r * lr, aabb(c, o + r * lt, r * lr))).collect()
+    }
+    let free = placed(shapes, origin, rotation, aabb);
+    for c in carried.iter().filter(|c| !leave.contains(&c.body)) {
+        let Some(rb) = bodies.get(c.body) else {
+            continue;
+        };
+        let Ok(law) = body_law(free_mass.min(c.mass)) else {
+            continue;
+        };
+        let (p, r, v, w) = cable.model.body_state(&c.place);
+        let mine_shapes = BodyShapes::of(rb, colliders);
+        let mine = placed(&mine_shapes, p, r, aabb);
+        let closing = speed + v.length() + w.length() * body_extent(rb, colliders);
+        let reach = 2.0 * h * closing + h * h * gravity + 0.01;
+        let pad = DVec3::splat(reach);
+        let to_link = |q: DVec3| c.place.origin + c.place.rotation * q;
+        let before = pairs.len();
+        // (Whether a touch point closes fast.)
+        let mut fast = false;
+        // How fast a carried point and a free one close along `n` (from
+        // the free point to the carried one): a strike, closing faster than
+        // `strike`, is rapier's (its restitution); bodies the island held
+        // together stay the island's however fast the cable jerks the
+        // carried one (a crate on a pallet a hook snatches up).
+        let centre = origin + rotation * com;
+        let closing_at = |on_carried: DVec3, on_free: DVec3, n: DVec3| {
+            let vc = v + w.cross(on_carried - p);
+            let vf = velocity + angular_velocity.cross(on_free - centre);
+            -(vc - vf).dot(n)
+        };
+        for &(mc, mo, mr, (mlo, mhi)) in &mine {
+            for &(fc, fo, fr, (flo, fhi)) in &free {
+                if (mlo - pad).cmpgt(fhi).any() || (mhi + pad).cmplt(flo).any() {
+                    continue;
+                }
+                let mu = combine(mc.friction() as f64, fc.friction() as f64, mc.friction_combine_rule(), fc.friction_combine_rule());
+                approach = approach.max(closing);
+                // The free body's touch points on the carried collider, and
+                // the carried body's on the free one: each a pair of the
+                // carried link's point (first) and the free body's, the
+                // normal from the free one to the carried one.
+                for carried_touches in [false, true] {
+                    let ((tc, to, tr), (sc, so, sr)) = if carried_touches { ((mc, mo, mr), (fc, fo, fr)) } else { ((fc, fo, fr), (mc, mo, mr)) };
+                    let ((tlt, tlr), (slt, slr)) = (offset(tc), offset(sc));
+                    for (q, radius) in touch_points(tc.shape()) {
+                        let at = to + tr * q;
+                        let Some((s, normal, d)) = nearest(sc.shape(), sr.transpose() * (at - so)) else {
+                            continue;
+                        };
+                        if d - radius > reach {
+                            continue;
+                        }
+                        // (Outward from the touched surface.)
+                        let out = sr * normal;
+                        let (on_carried, on_free, n) = if carried_touches { (at, so + sr * s, out) } else { (so + sr * s, at, -out) };
+                        fast |= strike.is_some_and(|(s, resting)| !resting.contains(&c.body) && closing_at(on_carried, on_free, n) > s);
+                        let (point_a, point_b) = if carried_touches { (tlt + tlr * q, slt + slr * s) } else { (slt + slr * s, tlt + tlr * q) };
+                        let element = PairContact::new(n, radius, law);
+                        pairs.push(RopePair {
+                            cable_a: chain_a,
+                            link_a: c.place.link,
+                            point_a: to_link(point_a),
+                            cable_b: chain_b,
+                            link_b,
+                            point_b,
+                            element,
+                            mu,
+                        });
+                    }
+                }
+            }
+        }
+        if fast {
+            pairs.truncate(before);
+            struck.push(c.body);
+        } else if pairs.len() > before {
+            touched.push(c.body);
+        }
+    }
+    CarriedPairs { pairs, approach, touched, struck }
+}
+
+/// What [`carried_pairs`] found.
+pub(crate) struct CarriedPairs {
+    /// The pairs.
+    pub pairs: Vec<RopePair>,
+    /// How fast they may close, m/s.
+    pub approach: f64,
+    /// The carried bodies they touch.
+    pub touched: Vec<rp::RigidBodyHandle>,
+    /// The carried bodies the free body strikes (left to rapier).
+    pub struck: Vec<rp::RigidBodyHandle>,
+}
+
 /// The contacts of `cable`'s rope nodes (chain `chain_a` of a forest) with
 /// a free body (chain `chain_b`, its body link `link_b`) at the pose
 /// `(origin, rotation)` moving at `speed` (m/s, a bound on its surface's

@@ -393,6 +393,14 @@ pub struct CoupledCable {
     /// Where the island's solve left each free body at the end of the last
     /// step (on the island's first cable), for [`after_rapier`].
     free_ends: Vec<BodyPass>,
+    /// This step's contacts between a free body and a carried body that
+    /// the island solved (`contact::carried_pairs`), as (free body,
+    /// carried body): rapier's contact between the two, which repeats
+    /// the island's, is not read back (`after_rapier`).
+    carried_solved: Vec<(rp::RigidBodyHandle, rp::RigidBodyHandle)>,
+    /// The last step's `carried_solved`: touches that stay the island's
+    /// however fast they close (`contact::carried_pairs`).
+    carried_resting: Vec<(rp::RigidBodyHandle, rp::RigidBodyHandle)>,
     /// The friction anchors of the island's free bodies on fixed and
     /// kinematic colliders, from step to step (on the island's first
     /// cable).
@@ -406,6 +414,10 @@ pub struct CoupledCable {
     /// The failure of this step's advance (time of the failing sub-step),
     /// collected in cable order after every cable advanced.
     advance_failure: Option<(f64, CableError)>,
+    /// The last step's size and sub-step size, s (0 before the first):
+    /// what `after_rapier` weighs rapier's strikes on the carried bodies
+    /// with (`reweigh_strikes`).
+    steps: (f64, f64),
     /// This step's bodies the cable's contacts leave out (its own bodies
     /// and a trolley's rail; none with contacts off), for every contact
     /// pass of the step and the free bodies' search.
@@ -1159,9 +1171,12 @@ fn finish(spec: &CableSpec, roles: EndRoles, parts: Vec<EndRoles>, draft: Draft,
         failed: false,
         free_forces: Vec::new(),
         free_ends: Vec::new(),
+        carried_solved: Vec::new(),
+        carried_resting: Vec::new(),
         free_friction: Vec::new(),
         free_written: Vec::new(),
         advance_failure: None,
+        steps: (0.0, 0.0),
         own: Vec::new(),
     })
 }
@@ -1316,6 +1331,7 @@ pub fn step_cables(
     for cc in cables.iter_mut() {
         cc.free_forces.clear();
         cc.free_ends.clear();
+        cc.carried_resting = std::mem::take(&mut cc.carried_solved);
     }
     for cc in cables.iter_mut().filter(|c| !c.failed) {
         cc.cable.model.chain.loads_mut().truncate(cc.fixed_loads);
@@ -1393,6 +1409,7 @@ pub fn step_cables(
         // at 1.7 s.
         let floating = cc.cable.model.layout.floating_start.then_some(crate::cable::rope::FLOATING_BODY_LINK);
         let step = h / n as f64;
+        cc.steps = (h, step);
         let anchored = !cc.cable.model.chain.anchors().is_empty();
         // Without the last step's contacts (the step's own are found
         // below, on the cleared chain): their stick springs would take the
@@ -1687,6 +1704,9 @@ struct Island {
     /// joint holds a free body, [`Contacts::jointed`]).
     bodies: Vec<(rp::RigidBodyHandle, bool)>,
     passes: u32,
+    /// The carried bodies a free body strikes at the step's start, as
+    /// (free body, carried body): rapier's (`contact::carried_pairs`).
+    struck: Vec<(rp::RigidBodyHandle, rp::RigidBodyHandle)>,
 }
 
 /// Whether a cable that has not failed has its contacts on.
@@ -1777,15 +1797,32 @@ fn cable_islands(
         join(&mut root, p.cable_a, p.cable_b);
     }
     approach.resize(nodes, 0.0);
+    let mut struck = Vec::new();
     for (k, &(handle, speed)) in free.iter().enumerate() {
         let Some(rb) = bodies.get(handle) else {
             continue;
         };
         let shapes = contact::BodyShapes::of(rb, colliders);
         let (origin, rotation) = pose_of(rb);
+        let resting: Vec<rp::RigidBodyHandle> = cables.iter().flat_map(|c| c.carried_resting.iter()).filter(|(f, _)| *f == handle).map(|(_, c)| *c).collect();
         for (c, (cable, settings)) in list.iter().enumerate() {
             let (touches, closing) = contact::body_pairs((cable, &extents[c]), settings, c, &shapes, (origin, rotation), speed, 0, FreeBody::LINK, h);
-            if !touches.is_empty() {
+            let carried = contact::carried_pairs(
+                cable,
+                &cables[candidates[c]].carried,
+                c,
+                (bodies, colliders),
+                (rb.mass() as f64, &shapes),
+                (origin, rotation),
+                (rb.linvel().as_dvec3(), rb.angvel().as_dvec3(), rb.local_center_of_mass().as_dvec3()),
+                speed,
+                (0, FreeBody::LINK),
+                (h, Some((strike_speed(cable, h), &resting))),
+                &[],
+            );
+            struck.extend(carried.struck.iter().map(|&c| (handle, c)));
+            let closing = closing.max(carried.approach);
+            if !touches.is_empty() || !carried.pairs.is_empty() {
                 join(&mut root, c, candidates.len() + k);
                 approach[c] = approach[c].max(closing);
                 approach[candidates.len() + k] = approach[candidates.len() + k].max(closing);
@@ -1805,7 +1842,7 @@ fn cable_islands(
         }
         if slot[r] == usize::MAX {
             slot[r] = islands.len();
-            islands.push(Island { members: Vec::new(), bodies: Vec::new(), passes: 1 });
+            islands.push(Island { members: Vec::new(), bodies: Vec::new(), passes: 1, struck: struck.clone() });
         }
         let island = &mut islands[slot[r]];
         if k < candidates.len() {
@@ -1949,7 +1986,7 @@ fn advance_island(
     loop {
         let mut ends = starts.clone();
         let mut friction = memories.clone();
-        match island_passes(cables, members, &mut ends, &mut friction, contacts, bodies, inputs, h, count, n) {
+        match island_passes(cables, (members, &island.struck), &mut ends, &mut friction, contacts, bodies, inputs, h, count, n) {
             Ok(()) => {
                 cables[members[0]].free_friction = starts.iter().map(|b| b.handle).zip(friction).collect();
                 // The ropes' impulse on each free body, to rapier.
@@ -1992,7 +2029,7 @@ fn advance_island(
 #[allow(clippy::too_many_arguments)]
 fn island_passes(
     cables: &mut [&mut CoupledCable],
-    members: &[usize],
+    (members, struck): (&[usize], &[(rp::RigidBodyHandle, rp::RigidBodyHandle)]),
     free: &mut [BodyPass],
     friction: &mut [contact::FrictionMemory],
     contacts: &Contacts<'_>,
@@ -2022,6 +2059,7 @@ fn island_passes(
         // The free bodies at the pass's start, as chains of their own.
         // (A body rapier no longer has keeps its state and gets no chain.)
         let mut chains: Vec<(usize, FreeBody)> = Vec::with_capacity(free.len());
+        let mut solved: Vec<(rp::RigidBodyHandle, rp::RigidBodyHandle)> = Vec::new();
         for (b, body) in free.iter().enumerate() {
             let Some(rb) = bodies.get(body.handle) else {
                 continue;
@@ -2059,6 +2097,22 @@ fn island_passes(
                 let (pairs, _) =
                     contact::body_pairs((cable, &extents[c]), settings, c, &shapes, (body.origin, body.rotation), speed, index, FreeBody::LINK, hp);
                 found.extend(pairs);
+                let leave: Vec<rp::RigidBodyHandle> = struck.iter().filter(|(f, _)| *f == body.handle).map(|(_, c)| *c).collect();
+                let carried = contact::carried_pairs(
+                    cable,
+                    &cables[listed[c]].carried,
+                    c,
+                    (bodies, contacts.colliders),
+                    (lumped.mass, &shapes),
+                    (body.origin, body.rotation),
+                    (body.velocity, body.angular_velocity, lumped.com),
+                    speed,
+                    (index, FreeBody::LINK),
+                    (hp, None),
+                    &leave,
+                );
+                found.extend(carried.pairs);
+                solved.extend(carried.touched.into_iter().map(|c| (body.handle, c)));
             }
             chains.push((b, chain));
         }
@@ -2086,6 +2140,12 @@ fn island_passes(
                 element: Arc::new(element.0),
             })
             .collect();
+        let kept = &mut cables[members[0]].carried_solved;
+        for pair in solved {
+            if !kept.contains(&pair) {
+                kept.push(pair);
+            }
+        }
         let hs = hp / n as f64;
         for _ in 0..n {
             let t = cables[members[0]].cable.time();
@@ -2184,6 +2244,11 @@ pub fn contact_passes(approach: f64, h: f64) -> u32 {
 /// the cable's pose and velocity. A failed cable no longer holds its
 /// bodies: they are left as rapier moved them.
 pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) {
+    let held = held_by_cables(cables);
+    // Contacts between free and carried bodies that an island solved:
+    // rapier's contact between the two only repeats it.
+    let solved: Vec<(rp::RigidBodyHandle, rp::RigidBodyHandle)> = cables.iter().flat_map(|c| c.carried_solved.iter().copied()).collect();
+    let parent = |other: rp::ColliderHandle| colliders.get(other).and_then(|c| c.parent());
     for cc in cables.iter_mut() {
         cc.free_written.clear();
         if cc.failed {
@@ -2191,17 +2256,22 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
             continue;
         }
         for end in std::mem::take(&mut cc.free_ends) {
-            if let Some(written) = put_free_body(end, bodies, colliders, narrow_phase) {
+            let solved_with = |other: rp::ColliderHandle| parent(other).is_some_and(|b| solved.contains(&(end.handle, b)));
+            if let Some(written) = put_free_body(end, bodies, colliders, narrow_phase, &solved_with) {
                 cc.free_written.push((end, written));
             }
         }
         for k in 0..cc.carried.len() {
+            let strikes = reweigh_strikes(cc, k, &held, &solved, bodies, colliders, narrow_phase);
             let (p, r, v, w) = cc.carried_state(&cc.carried[k]);
             // Contacts with fixed and kinematic colliders are in the cable's
             // solve when its carried bodies' contacts are
             // (`add_body_contacts`): only the others (dynamic bodies) count
             // then.
-            let handled = |other: rp::ColliderHandle| cc.body_contacts && owner_is_dynamic(other, bodies, colliders) == Some(false);
+            let me = cc.carried[k].body;
+            let handled = |other: rp::ColliderHandle| {
+                (cc.body_contacts && owner_is_dynamic(other, bodies, colliders) == Some(false)) || parent(other).is_some_and(|b| solved.contains(&(b, me)))
+            };
             let touched = bodies.get(cc.carried[k].body).is_some_and(|rb| rapier_touches(rb, narrow_phase, |other| !handled(other)));
             let c = &mut cc.carried[k];
             let Some(rb) = bodies.get_mut(c.body) else {
@@ -2210,7 +2280,7 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
             if touched {
                 let (_, r_now) = pose_of(rb);
                 let i_world = r_now * c.inertia * r_now.transpose();
-                c.contact = ((rb.linvel().as_dvec3() - c.landing.0) * c.mass, i_world * (rb.angvel().as_dvec3() - c.landing.1));
+                c.contact = ((rb.linvel().as_dvec3() - c.landing.0) * c.mass + strikes.0, i_world * (rb.angvel().as_dvec3() - c.landing.1) + strikes.1);
             }
             rb.set_position(rp::Pose::from_parts(p.as_vec3(), DQuat::from_mat3(&r).as_quat()), true);
             rb.set_linvel(v.as_vec3(), true);
@@ -2219,6 +2289,161 @@ pub fn after_rapier(cables: &mut [&mut CoupledCable], bodies: &mut rp::RigidBody
             c.left_at = Some(rb.translation());
         }
     }
+}
+
+/// How fast (m/s) a free body and a carried one must close to strike
+/// (rapier's contact, with its restitution) rather than touch (the
+/// island's, `contact::carried_pairs`): two frame steps `h` (s) of
+/// `cable`'s gravity. A body resting on a carried one closes at one.
+fn strike_speed(cable: &Cable, h: f64) -> f64 {
+    2.0 * cable.model.chain.gravity.length() * h
+}
+
+/// Rapier's contacts between carried body `k` of `cc` and the dynamic
+/// bodies no cable holds (a ball striking a payload, a crate resting on a
+/// plank), weighed again with the cable's answer at the contact point.
+/// Rapier solved each as if the carried body were free, with its own mass:
+/// a 60 kg ball dropped at 5 m/s on a 10 kg plank hung on two taut steel
+/// ropes was slowed by a seventh of the closing speed per step, as by a
+/// free plank, while the ropes held the plank: the ball sank through it
+/// (2026-11-29). For each such pair, the normal impulse `λ` rapier gave is
+/// scaled by `(w_free + w_B) / (w_cable + w_B)`, the mobilities along the
+/// normal at the impulse's point of the free body (`1/m + (r×n)·I⁻¹(r×n)`),
+/// of the striking body, and of the carried body through the cable
+/// ([`Cable::point_mobility`], over the impulse's time in the next step):
+/// the closing speed rapier's impulse removed (or reversed, with its
+/// restitution) is then removed with the mass the cable gives the point.
+/// The striking body gets the difference at once (velocities, and its
+/// position as rapier would have moved it at them over the step, less the
+/// way the carried point would have given under the strike over the step,
+/// as it takes its share only at the cable's next step); the carried
+/// body's share is returned (impulse at its centre of mass, N·s, and
+/// angular impulse, N·m·s) for the cable's next step, with the rest of
+/// rapier's. Only new strikes (no contact impulse in the last step): a
+/// resting contact is the island's (`contact::carried_pairs`). A body that
+/// is fixed, kinematic, held by a cable or carried is left alone, and so
+/// is friction (rapier's tangential impulses are kept as they are).
+fn reweigh_strikes(
+    cc: &mut CoupledCable,
+    k: usize,
+    held: &[rp::RigidBodyHandle],
+    solved: &[(rp::RigidBodyHandle, rp::RigidBodyHandle)],
+    bodies: &mut rp::RigidBodySet,
+    colliders: &rp::ColliderSet,
+    narrow_phase: &rp::NarrowPhase,
+) -> (DVec3, DVec3) {
+    let (h, sub) = cc.steps;
+    let mut total = (DVec3::ZERO, DVec3::ZERO);
+    let c = &cc.carried[k];
+    let Some(rb) = bodies.get(c.body) else {
+        return total;
+    };
+    // (Only new strikes: a contact that goes on is the island's, or, if
+    // the island cannot take it, rapier's as before; weighed again every
+    // step, a 20 kg ball resting on a 10 kg plank on steel ropes set the
+    // plank ringing and sank through it in 5 s.)
+    if h <= 0.0 || c.touching {
+        return total;
+    }
+    // Each pair's normal impulse on the striking body (N·s, world, from
+    // the carried body towards it), its point, and the striking body.
+    let mut strikes: Vec<(rp::RigidBodyHandle, DVec3, DVec3, f64)> = Vec::new();
+    for &mine in rb.colliders() {
+        for pair in narrow_phase.contact_pairs_with(mine) {
+            let other = if pair.collider1 == mine { pair.collider2 } else { pair.collider1 };
+            let Some(ob) = colliders.get(other).and_then(|c| c.parent()) else {
+                continue;
+            };
+            if ob == c.body || held.contains(&ob) || solved.contains(&(ob, c.body)) || !bodies.get(ob).is_some_and(|b| b.is_dynamic()) {
+                continue;
+            }
+            let Some(first) = colliders.get(pair.collider1) else {
+                continue;
+            };
+            let sign = if pair.collider1 == mine { 1.0 } else { -1.0 };
+            let (mut impulse, mut at, mut sum) = (DVec3::ZERO, DVec3::ZERO, 0.0);
+            for m in pair.solver_manifolds() {
+                let normal = m.data.normal.as_dvec3() * sign;
+                let pose = match m.subshape_poses.as_ref().and_then(|p| p.pos1) {
+                    Some(sub) => *first.position() * sub,
+                    None => *first.position(),
+                };
+                for p in &m.points {
+                    let l = p.data.impulse as f64;
+                    if l > 0.0 {
+                        impulse += l * normal;
+                        at += l * (pose * p.local_p1).as_dvec3();
+                        sum += l;
+                    }
+                }
+            }
+            if sum > 0.0 {
+                strikes.push((ob, impulse, at / sum, impulse.length()));
+            }
+        }
+    }
+    let (pc, rc, _, _) = cc.carried_state(c);
+    let (mass, inertia, place) = (c.mass, rc * c.inertia * rc.transpose(), c.place);
+    let com = pc + rc * c.com;
+    let floating = cc.cable.model.layout.floating_start.then_some(crate::cable::rope::FLOATING_BODY_LINK);
+    let over = if !cc.cable.model.chain.anchors().is_empty() || Some(place.link) != floating { sub } else { 0.0 };
+    for (ob, impulse, at, lambda) in strikes {
+        let n = impulse / lambda;
+        let free = |m: f64, i: DMat3, r: DVec3| {
+            let rn = r.cross(n);
+            1.0 / m + rn.dot(i.inverse() * rn)
+        };
+        let Some(b) = bodies.get(ob) else {
+            continue;
+        };
+        let lb = lumped_of(b);
+        let (rb_pose, b_com) = (lb.rotation, lb.position + lb.rotation * lb.com);
+        let ib = rb_pose * lb.inertia * rb_pose.transpose();
+        let w_b = free(lb.mass, ib, at - b_com);
+        let w_free = free(mass, inertia, at - com);
+        // The point in the link's frame.
+        let chain = &cc.cable.model.chain;
+        let (Some(lp), Some(lr)) = (chain.link_point(place.link, DVec3::ZERO), chain.link_rotation(place.link)) else {
+            continue;
+        };
+        let local = lr.transpose() * (at - lp);
+        let Ok(w_cable) = cc.cable.point_mobility(place.link, local, n, over) else {
+            continue;
+        };
+        let w_cable = w_cable.max(0.0);
+        let scale = (w_free + w_b) / (w_cable + w_b);
+        if !(scale.is_finite() && w_b.is_finite() && w_free.is_finite()) {
+            continue;
+        }
+        let extra = (scale - 1.0) * impulse;
+        // The carried body takes its share at the cable's next step: over
+        // this one it moved on without it, while the striking body moved
+        // at its new velocity. That body is put back by what the share
+        // would have moved the carried point over the step (`h w_cable λ*`
+        // along the normal).
+        let lag = n * (h * w_cable * scale * lambda);
+        // The striking body: its share now, and the displacement rapier
+        // would have given it over its step.
+        let Some(b) = bodies.get_mut(ob) else {
+            continue;
+        };
+        let dv = extra / lb.mass;
+        let dw = ib.inverse() * (at - b_com).cross(extra);
+        if !(dv.is_finite() && dw.is_finite()) {
+            continue;
+        }
+        let pose = *b.position();
+        let turn = DQuat::from_scaled_axis(dw * h);
+        let centre = b_com + dv * h + lag;
+        let rotation = (turn * pose.rotation.as_dquat()).normalize();
+        let origin = centre - rotation * lb.com;
+        b.set_position(rp::Pose::from_parts(origin.as_vec3(), rotation.as_quat()), true);
+        b.set_linvel(b.linvel() + dv.as_vec3(), true);
+        b.set_angvel(b.angvel() + dw.as_vec3(), true);
+        total.0 -= extra;
+        total.1 -= (at - com).cross(extra);
+    }
+    total
 }
 
 /// Whether the body owning collider `other` is dynamic (`None`: no such
@@ -2259,12 +2484,20 @@ fn rapier_touches(rb: &rp::RigidBody, narrow_phase: &rp::NarrowPhase, counts: im
 /// keeps rapier's pose and velocities: the island did not hold those
 /// contacts, and on its pose a box on the ground under a rope sank 5 cm
 /// into it.
-fn put_free_body(end: BodyPass, bodies: &mut rp::RigidBodySet, colliders: &rp::ColliderSet, narrow_phase: &rp::NarrowPhase) -> Option<Written> {
+fn put_free_body(
+    end: BodyPass,
+    bodies: &mut rp::RigidBodySet,
+    colliders: &rp::ColliderSet,
+    narrow_phase: &rp::NarrowPhase,
+    solved: &dyn Fn(rp::ColliderHandle) -> bool,
+) -> Option<Written> {
     let rb = bodies.get(end.handle)?;
-    // Rapier's active contacts on the body: with dynamic bodies, and with
+    // Rapier's active contacts on the body: with dynamic bodies (but the
+    // carried bodies whose contacts with it the island solved), and with
     // anything else (fixed or kinematic bodies, colliders without a body).
     let dynamic = |other| owner_is_dynamic(other, bodies, colliders) == Some(true);
-    let (touched, held) = (rapier_touches(rb, narrow_phase, dynamic), rapier_touches(rb, narrow_phase, |other| !dynamic(other)));
+    let touched = |other| dynamic(other) && !solved(other);
+    let (touched, held) = (rapier_touches(rb, narrow_phase, touched), rapier_touches(rb, narrow_phase, |other| !dynamic(other)));
     let rb = bodies.get_mut(end.handle)?;
     let close = |a: DVec3, b: DVec3| (a - b).length() <= 1e-5 * (1.0 + b.length());
     // A body whose contacts with fixed and kinematic colliders the island
