@@ -1967,6 +1967,10 @@ fn advance_island(
         if solvable && memory.is_none() {
             origin = contact::out_of_obstacles(handle, (origin, rotation), contacts, bodies, start);
         }
+        let resting: Vec<rp::RigidBodyHandle> =
+            members.iter().flat_map(|&i| cables[i].carried_resting.iter()).filter(|(f, _)| *f == handle).map(|(_, c)| *c).collect();
+        let carried: Vec<(&Cable, &[CarriedLink])> = members.iter().map(|&i| (&cables[i].cable, &cables[i].carried[..])).collect();
+        origin = contact::out_of_carried(handle, (origin, rotation), &carried, &resting, bodies, contacts.colliders);
         starts.push(BodyPass { handle, grounded, origin, rotation, velocity, angular_velocity });
         memories.push(memory.unwrap_or_default());
     }
