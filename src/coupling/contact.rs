@@ -2393,15 +2393,16 @@ impl<'a> BodyShapes<'a> {
 /// steel on steel ([`body_law`], the lighter body's mass), the colliders'
 /// combined friction. A carried body that the free body strikes (one of
 /// its touch points closing faster than `strike`'s speed, m/s, unless the
-/// island held the two together at the last step, `strike`'s list; the
-/// step's start gives two frame steps of gravity, its passes `None`) is
+/// island held the two together or rapier met their strike at the last
+/// step, `strike`'s list; the step's start gives two frame steps of
+/// gravity, its passes `None`) is
 /// left to rapier, whose restitution the strike keeps
 /// (`reweigh_strikes`), as are the carried bodies in `leave` (struck at
 /// the step's start). Rapier meets a carried body as a free body of its
 /// own mass, one step behind the cable: a 20 kg ball resting on a 10 kg
 /// plank hung on two steel ropes sank 11 cm into it, and a 60 kg ball
-/// went through (2026-11-29). Returns the pairs and how fast they may
-/// close (m/s), and the carried bodies touched.
+/// went through (2026-11-29). Returns the pairs, how fast they may close
+/// (m/s), and the carried bodies touched and struck ([`CarriedPairs`]).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn carried_pairs(
     cable: &Cable,
