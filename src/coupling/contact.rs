@@ -1537,13 +1537,7 @@ impl BodyTouch {
     /// them.
     fn points(&self, rb: &rp::RigidBody, colliders: &rp::ColliderSet) -> Vec<(DVec3, f64, f64)> {
         let (p, r, v, w) = self.state;
-        rb.colliders()
-            .iter()
-            .filter_map(|c| colliders.get(*c))
-            .filter(|c| !c.is_sensor())
-            .flat_map(placed_touch_points)
-            .map(|(q, radius)| (p + r * q, radius, (v + w.cross(r * q)).length()))
-            .collect()
+        body_touch_points(rb, colliders).into_iter().map(|(q, radius)| (p + r * q, radius, (v + w.cross(r * q)).length())).collect()
     }
 
     /// Pushes onto `hits` a [`SphereContact`] for each touch point
@@ -1660,28 +1654,50 @@ pub(crate) fn out_of_obstacles(
         return origin;
     };
     let obstacles = Obstacle::all(world, bodies, &[handle], (now, now), None);
-    let points: Vec<(DVec3, f64)> =
-        rb.colliders().iter().filter_map(|c| world.colliders.get(*c)).filter(|c| !c.is_sensor()).flat_map(placed_touch_points).collect();
+    let points = body_touch_points(rb, world.colliders);
+    moved_out((origin, rotation), &points, &obstacles, GROUNDED_DEPTH, |obstacle, p, radius| {
+        let (cmin, cmax) = obstacle.aabb();
+        if (p - radius).cmpgt(cmax).any() || (p + radius).cmplt(cmin).any() {
+            return None;
+        }
+        obstacle.nearest(p).map(|hit| (radius - hit.2, obstacle.rotation * hit.1))
+    })
+}
+
+/// The touch points ([`placed_touch_points`]) of `rb`'s non-sensor
+/// colliders, in its frame (m), each with its radius (m).
+fn body_touch_points(rb: &rp::RigidBody, colliders: &rp::ColliderSet) -> Vec<(DVec3, f64)> {
+    rb.colliders().iter().filter_map(|c| colliders.get(*c)).filter(|c| !c.is_sensor()).flat_map(placed_touch_points).collect()
+}
+
+/// A body's frame `origin` (turned by `rotation`) moved out of `surfaces`
+/// along the normal of its deepest touch point (`points`, body frame, with
+/// their radii), up to four times, while that depth is positive and at
+/// most `limit` (m): `depth(surface, point, radius)` gives a world touch
+/// point's depth into a surface and the surface's outward world normal
+/// there. The surfaces are searched in order, each over every point; the
+/// first of equal depths wins.
+fn moved_out<S>(
+    (origin, rotation): (DVec3, DMat3),
+    points: &[(DVec3, f64)],
+    surfaces: &[S],
+    limit: f64,
+    depth: impl Fn(&S, DVec3, f64) -> Option<(f64, DVec3)>,
+) -> DVec3 {
     let mut origin = origin;
     for _ in 0..4 {
         let mut deepest: Option<(f64, DVec3)> = None;
-        for obstacle in &obstacles {
-            let (cmin, cmax) = obstacle.aabb();
-            for (q, radius) in &points {
-                let p = origin + rotation * *q;
-                if (p - *radius).cmpgt(cmax).any() || (p + *radius).cmplt(cmin).any() {
-                    continue;
-                }
-                if let Some(hit) = obstacle.nearest(p) {
-                    let depth = radius - hit.2;
-                    if depth > deepest.map_or(0.0, |d| d.0) {
-                        deepest = Some((depth, obstacle.rotation * hit.1));
+        for surface in surfaces {
+            for (q, radius) in points {
+                if let Some((d, normal)) = depth(surface, origin + rotation * *q, *radius) {
+                    if d > deepest.map_or(0.0, |d| d.0) {
+                        deepest = Some((d, normal));
                     }
                 }
             }
         }
         match deepest {
-            Some((depth, normal)) if depth <= GROUNDED_DEPTH => origin += normal * depth,
+            Some((d, normal)) if d <= limit => origin += normal * d,
             _ => break,
         }
     }
@@ -1708,7 +1724,7 @@ pub(crate) fn out_of_carried(
     let Some(rb) = bodies.get(handle) else {
         return origin;
     };
-    let points: Vec<(DVec3, f64)> = rb.colliders().iter().filter_map(|c| colliders.get(*c)).filter(|c| !c.is_sensor()).flat_map(placed_touch_points).collect();
+    let points = body_touch_points(rb, colliders);
     let mut surfaces: Vec<(&rp::Collider, DVec3, DMat3)> = Vec::new();
     for (cable, links) in carried {
         for c in links.iter().filter(|c| !resting.contains(&c.body) && c.body != handle) {
@@ -1719,26 +1735,9 @@ pub(crate) fn out_of_carried(
             surfaces.extend(BodyShapes::of(body, colliders).colliders.into_iter().map(|(co, lt, lr)| (co, p + r * lt, r * lr)));
         }
     }
-    let mut origin = origin;
-    for _ in 0..4 {
-        let mut deepest: Option<(f64, DVec3)> = None;
-        for &(co, o, r) in &surfaces {
-            for (q, radius) in &points {
-                let at = origin + rotation * *q;
-                if let Some((_, normal, d)) = nearest(co.shape(), r.transpose() * (at - o)) {
-                    let depth = radius - d;
-                    if depth > deepest.map_or(0.0, |d| d.0) {
-                        deepest = Some((depth, r * normal));
-                    }
-                }
-            }
-        }
-        match deepest {
-            Some((depth, normal)) => origin += normal * depth,
-            None => break,
-        }
-    }
-    origin
+    moved_out((origin, rotation), &points, &surfaces, f64::INFINITY, |&(co, o, r), at, radius| {
+        nearest(co.shape(), r.transpose() * (at - o)).map(|(_, normal, d)| (radius - d, r * normal))
+    })
 }
 
 /// Adds this pass's contacts of a free body of an island (the rapier body

@@ -479,6 +479,34 @@ impl CoupledCable {
         (p, r, v + w.cross(rc), w)
     }
 
+    /// The time (s) over which the chain answers an impulse on link
+    /// `link` at a (sub-)step of `step` s ([`Cable::apply_impulse`]'s `h`;
+    /// [`Cable::point_mobility`] weighs a strike with the same).
+    ///
+    /// The response over the (sub-)step, `(M + h C + h² K)⁻¹ Jᵀ` with the
+    /// rope's and its anchor springs' stiffness, as a pin or clamp would
+    /// answer the impulse, and as the rope's stiff directions must: the
+    /// instant response (the mass matrix alone) sends the jump into the
+    /// cheapest motion, the shear slide at the
+    /// body (the body alone moving across the last element), and the
+    /// next step had that shear spring ring at the body's speed: a 1 t
+    /// ball on 10.4 m of damped steel rope pushed at 0.2 m/s stopped
+    /// with "Newton did not converge" (2026-11-28; the same with a
+    /// sling's grafted leg giving way at its anchor spring before).
+    /// The chain's floating root (a car towing) is the exception: its
+    /// own six coordinates come first, so the instant response moves it
+    /// without a kink, and over the step the taut rope took a `Velocity`
+    /// write's jump every frame until a tow line driven that way stopped
+    /// at 1.7 s.
+    fn impulse_time(&self, link: usize, step: f64) -> f64 {
+        let floating = self.cable.model.layout.floating_start.then_some(crate::cable::rope::FLOATING_BODY_LINK);
+        if !self.cable.model.chain.anchors().is_empty() || Some(link) != floating {
+            step
+        } else {
+            0.0
+        }
+    }
+
     /// Marks the cable's constant loads (those on the chain now): the
     /// per-step loads of the carried bodies are added after them.
     pub fn keep_loads(&mut self) {
@@ -1401,32 +1429,15 @@ pub fn step_cables(
                 cc.cable.model.chain.loads_mut().push(LinkLoad { link, force, local_point, moment });
             }
         }
-        // The response over the (sub-)step, `(M + h C + h² K)⁻¹ Jᵀ` with the
-        // rope's and its anchor springs' stiffness, as a pin or clamp would
-        // answer the impulse, and as the rope's stiff directions must: the
-        // instant response (the mass matrix alone) sends the jump into the
-        // cheapest motion, the shear slide at the
-        // body (the body alone moving across the last element), and the
-        // next step had that shear spring ring at the body's speed: a 1 t
-        // ball on 10.4 m of damped steel rope pushed at 0.2 m/s stopped
-        // with "Newton did not converge" (2026-11-28; the same with a
-        // sling's grafted leg giving way at its anchor spring before).
-        // The chain's floating root (a car towing) is the exception: its
-        // own six coordinates come first, so the instant response moves it
-        // without a kink, and over the step the taut rope took a `Velocity`
-        // write's jump every frame until a tow line driven that way stopped
-        // at 1.7 s.
-        let floating = cc.cable.model.layout.floating_start.then_some(crate::cable::rope::FLOATING_BODY_LINK);
         let step = h / n as f64;
         cc.steps = (h, step);
-        let anchored = !cc.cable.model.chain.anchors().is_empty();
         // Without the last step's contacts (the step's own are found
         // below, on the cleared chain): their stick springs would take the
         // jump over the step, and a car on the ground whose `Velocity` the
         // user writes did not move at all.
         contact::clear(&mut cc.cable, cc.fixed_forces, cc.fixed_pairs);
         for (link, point, (impulse, angular)) in impulses {
-            let over = if anchored || Some(link) != floating { step } else { 0.0 };
+            let over = cc.impulse_time(link, step);
             if let Err(e) = cc.cable.apply_impulse(link, point, impulse, angular, over) {
                 cc.advance_failure = Some((cc.cable.time(), e));
             }
@@ -2409,8 +2420,7 @@ fn reweigh_strikes(
     let (pc, rc, _, _) = cc.carried_state(c);
     let (mass, inertia, place) = (c.mass, rc * c.inertia * rc.transpose(), c.place);
     let com = pc + rc * c.com;
-    let floating = cc.cable.model.layout.floating_start.then_some(crate::cable::rope::FLOATING_BODY_LINK);
-    let over = if !cc.cable.model.chain.anchors().is_empty() || Some(place.link) != floating { sub } else { 0.0 };
+    let over = cc.impulse_time(place.link, sub);
     for (ob, impulse, at, lambda) in strikes {
         let n = impulse / lambda;
         let free = |m: f64, i: DMat3, r: DVec3| {
