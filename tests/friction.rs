@@ -94,6 +94,37 @@ fn sticking_friction_tangents_are_the_derivatives_of_its_wrench() {
     }
 }
 
+/// A contact's friction held on a branch within a Newton solve
+/// ([`ForceElement::wrench_on`]): on the branch it is on, the held law is
+/// the law itself (its wrench and tangents to the bit); held sticking past
+/// `μ F_n` it gives the stick spring's trial force, and held slipping
+/// inside the limit `μ F_n` along the trial force; and
+/// [`ForceElement::branch_disagreement`] is how far, relative to `μ F_n`,
+/// the trial force lies outside the held branch (0 on its own).
+#[test]
+fn friction_held_on_a_branch_is_its_law_there_and_says_how_far_it_is_outside() {
+    let mu = 0.5;
+    let c = ball_contact(mu, DVec3::ZERO, DMat3::IDENTITY);
+    let k_t = CoulombFriction::from_law(mu, &law(), DVec3::ZERO, &at(DVec3::ZERO, DMat3::IDENTITY), 1e9).unwrap().stiffness;
+    let pressed = |dx: f64| at(DVec3::new(dx, 0.05 - 3e-6, 0.0), DMat3::IDENTITY);
+    let limit = mu * c.normal_force(0.0, &pressed(0.0));
+    // Stretched to 40 % and to 250 % of the limit.
+    let (inside, outside) = (pressed(0.4 * limit / k_t), pressed(2.5 * limit / k_t));
+    assert_eq!(c.branch(0.0, &inside), Some(FrictionBranch::Stick));
+    assert_eq!(c.branch(0.0, &outside), Some(FrictionBranch::Slip));
+    assert_eq!(c.branch(0.0, &at(DVec3::new(0.0, 0.06, 0.0), DMat3::IDENTITY)), None, "a contact without normal force has no branch");
+    for (state, own) in [(inside, FrictionBranch::Stick), (outside, FrictionBranch::Slip)] {
+        assert_eq!(c.wrench_on(0.0, &state, own), c.wrench(0.0, &state));
+        assert_eq!(c.branch_disagreement(0.0, &state, own), 0.0);
+    }
+    let held = c.wrench_on(0.0, &outside, FrictionBranch::Stick);
+    assert!((held.force.x + 2.5 * limit).abs() < 1e-9 * limit, "held sticking: {} N against the trial force {} N", held.force.x, -2.5 * limit);
+    assert!((c.branch_disagreement(0.0, &outside, FrictionBranch::Stick) - 1.5).abs() < 1e-9);
+    let held = c.wrench_on(0.0, &inside, FrictionBranch::Slip);
+    assert!((held.force.x + limit).abs() < 1e-9 * limit, "held slipping: {} N against μ F_n = {limit} N", held.force.x);
+    assert!((c.branch_disagreement(0.0, &inside, FrictionBranch::Slip) - 0.6).abs() < 1e-9);
+}
+
 /// Against a curved obstacle ([`Curve`]: a ball, or a cylinder's round
 /// side) a contact's stiffness tangent is the derivative of its force,
 /// with the turning normal's part `−(F_n/ρ)(P − n nᵀ)` (central

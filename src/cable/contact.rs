@@ -51,7 +51,7 @@
 use glam::{DMat3, DVec3};
 
 use super::chain::rotation_vector;
-use super::force::{ForceElement, PairElement, PairWrench, PointState, PointWrench};
+use super::force::{ForceElement, FrictionBranch, PairElement, PairWrench, PointState, PointWrench};
 use super::spatial::{outer3, skew, M6};
 
 /// Why a contact law cannot be built.
@@ -383,13 +383,46 @@ impl CoulombFriction {
 /// The tangential part of a contact at one state: the force, the
 /// factor on the stick tangents (1 sticking, `μ F_n/|F_trial|` slipping),
 /// the slip direction (zero sticking), the contact point's arm from the
-/// link point, and the stick spring's stretch `P (c − a)`.
+/// link point, the stick spring's stretch `P (c − a)`, and the trial
+/// force's size and the limit.
 struct Tangential {
     force: DVec3,
     scale: f64,
     direction: DVec3,
     arm: DVec3,
     stretch: DVec3,
+    /// The trial force's size and the limit, N.
+    size: f64,
+    limit: f64,
+}
+
+/// The tangential part from the trial force `trial` (N) and the friction
+/// limit `limit` (N, > 0): the trial force while it sticks, `limit` along
+/// it while it slips; on the law's own branch (`forced` `None`: it sticks
+/// while `|trial| ≤ limit`) or held on `forced` (a Newton solve's frozen
+/// branch, [`ForceElement::wrench_on`]; a zero trial force sticks).
+fn saturate(trial: DVec3, limit: f64, forced: Option<FrictionBranch>, arm: DVec3, stretch: DVec3) -> Tangential {
+    let size = trial.length();
+    let stick = match forced {
+        None => size <= limit,
+        Some(FrictionBranch::Stick) => true,
+        Some(FrictionBranch::Slip) => size == 0.0,
+    };
+    if stick {
+        Tangential { force: trial, scale: 1.0, direction: DVec3::ZERO, arm, stretch, size, limit }
+    } else {
+        let direction = trial / size;
+        Tangential { force: direction * limit, scale: limit / size, direction, arm, stretch, size, limit }
+    }
+}
+
+/// How far a trial force of size `size` (N) lies outside `branch` with
+/// the limit `limit` (N), relative to the limit ([`ForceElement::branch_disagreement`]).
+fn outside(size: f64, limit: f64, branch: FrictionBranch) -> f64 {
+    match branch {
+        FrictionBranch::Stick => (size - limit).max(0.0) / limit,
+        FrictionBranch::Slip => (limit - size).max(0.0) / limit,
+    }
 }
 
 impl SphereContact {
@@ -450,6 +483,12 @@ impl SphereContact {
     /// normal there `n` ([`Touch::normal`]); `None` without friction or
     /// without contact.
     fn tangential(&self, t: f64, at: &PointState, n: DVec3, normal: f64) -> Option<Tangential> {
+        self.tangential_on(t, at, n, normal, None)
+    }
+
+    /// [`SphereContact::tangential`] held on `forced` (the law's own
+    /// branch for `None`).
+    fn tangential_on(&self, t: f64, at: &PointState, n: DVec3, normal: f64, forced: Option<FrictionBranch>) -> Option<Tangential> {
         let friction = self.friction?;
         let limit = friction.coefficient * normal.min(friction.normal_bound * (1.0 + BOUND_GROWTH));
         if limit <= 0.0 {
@@ -466,13 +505,7 @@ impl SphereContact {
         let project = |x: DVec3| x - n * x.dot(n);
         let stretch = project(at.point + arm + turn.cross(arm) - anchor);
         let trial = -(stretch * friction.stiffness + project(slip) * friction.damping);
-        let size = trial.length();
-        Some(if size <= limit {
-            Tangential { force: trial, scale: 1.0, direction: DVec3::ZERO, arm, stretch }
-        } else {
-            let direction = trial / size;
-            Tangential { force: direction * limit, scale: limit / size, direction, arm, stretch }
-        })
+        Some(saturate(trial, limit, forced, arm, stretch))
     }
 
     /// Penetration (m, > 0 inside) and its rate (m/s, > 0 approaching) at
@@ -699,13 +732,7 @@ impl PairContact {
         let project = |x: DVec3| x - n * x.dot(n);
         let stretch = project(a.point - b.point - friction.offset);
         let trial = -(stretch * friction.stiffness + project(a.velocity - b.velocity) * friction.damping);
-        let size = trial.length();
-        Some(if size <= limit {
-            Tangential { force: trial, scale: 1.0, direction: DVec3::ZERO, arm: DVec3::ZERO, stretch }
-        } else {
-            let direction = trial / size;
-            Tangential { force: direction * limit, scale: limit / size, direction, arm: DVec3::ZERO, stretch }
-        })
+        Some(saturate(trial, limit, None, DVec3::ZERO, stretch))
     }
 }
 
@@ -756,8 +783,10 @@ impl PairElement for PairContact {
     }
 }
 
-impl ForceElement for SphereContact {
-    fn wrench(&self, t: f64, at: &PointState) -> PointWrench {
+impl SphereContact {
+    /// [`ForceElement::wrench`], its friction held on `forced` (the law's
+    /// own branch for `None`).
+    fn wrench_held(&self, t: f64, at: &PointState, forced: Option<FrictionBranch>) -> PointWrench {
         let touch = self.touch(t, at);
         let (f, k, c) = self.law.force(touch.depth, touch.rate);
         let n = touch.normal;
@@ -797,7 +826,7 @@ impl ForceElement for SphereContact {
             w.stiffness.b -= outer3(t, e) * f;
             w.stiffness.c -= outer3(e, t) * f;
         }
-        if let (Some(friction), Some(x)) = (self.friction, self.tangential(t, at, n, f)) {
+        if let (Some(friction), Some(x)) = (self.friction, self.tangential_on(t, at, n, f, forced)) {
             // Sticking: −∂F_t/∂c = k_t P. Slipping, F_t = μ F_n d̂ with
             // d̂ the trial force's direction: k_t (μ F_n/|F_trial|)(P − d̂ d̂ᵀ),
             // symmetric; the term μ d̂ ∂F_n/∂c that couples the slip
@@ -817,6 +846,31 @@ impl ForceElement for SphereContact {
             w.damping += at_arm(arm, tangent * (friction.damping * x.scale));
         }
         w
+    }
+}
+
+impl ForceElement for SphereContact {
+    fn wrench(&self, t: f64, at: &PointState) -> PointWrench {
+        self.wrench_held(t, at, None)
+    }
+
+    fn wrench_on(&self, t: f64, at: &PointState, branch: FrictionBranch) -> PointWrench {
+        self.wrench_held(t, at, Some(branch))
+    }
+
+    /// Sticking or slipping while the contact presses with friction.
+    fn branch(&self, t: f64, at: &PointState) -> Option<FrictionBranch> {
+        if std::env::var("ZZA").is_ok() && self.friction?.normal_bound == 0.0 {
+            return None;
+        }
+        let (touch, normal) = self.pressed(t, at);
+        let x = self.tangential(t, at, touch.normal, normal)?;
+        Some(if x.direction == DVec3::ZERO { FrictionBranch::Stick } else { FrictionBranch::Slip })
+    }
+
+    fn branch_disagreement(&self, t: f64, at: &PointState, branch: FrictionBranch) -> f64 {
+        let (touch, normal) = self.pressed(t, at);
+        self.tangential(t, at, touch.normal, normal).map_or(0.0, |x| outside(x.size, x.limit, branch))
     }
 
     fn energy(&self, t: f64, at: &PointState) -> f64 {

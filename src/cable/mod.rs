@@ -6,7 +6,7 @@ pub mod chain;
 pub mod contact;
 pub use self::contact::{ContactError, CoulombFriction, Curve, ImpactLaw, PairContact, PairFriction, Span, SphereContact};
 pub mod force;
-pub use self::force::{AttachedForce, AttachedPair, ForceElement, PairElement, PairSpring, PairWrench, PointSpring, PointState, PointWrench};
+pub use self::force::{AttachedForce, AttachedPair, ForceElement, FrictionBranch, PairElement, PairSpring, PairWrench, PointSpring, PointState, PointWrench};
 pub mod spatial;
 pub use self::chain::{
     AnchorSpring, BaseMotion, BaseState, Chain, ChainError, Forest, ForestPair, FreeBody, JointKind, Limb, LinkLoad, LinkMass, RotationSpring, SampledMotion,

@@ -31,7 +31,7 @@ pub use nonsmooth::StaticError;
 pub use parts::*;
 pub(crate) use sweep::*;
 
-use super::force::{AttachedForce, AttachedPair, ForceElement, PairWrench, PointState, PointWrench};
+use super::force::{AttachedForce, AttachedPair, ForceElement, FrictionBranch, PairWrench, PointState, PointWrench};
 use super::spatial::{M6, V6};
 use crate::integrate::{EnergyBalance, SystemError};
 use glam::{DMat3, DVec3};
@@ -174,6 +174,15 @@ pub struct Chain {
     /// `frozen` (see [`SecondOrderSystem::freeze_branches`]).
     branch: Vec<LawBranch>,
     frozen: bool,
+    /// Per force element: the branch its law is held on while
+    /// `forces_frozen` (`None`: a smooth law, or a contact not engaged at
+    /// the solve's first iterate); read at the first evaluation after
+    /// [`SecondOrderSystem::freeze_branches`] (empty until then).
+    force_branch: Vec<Option<FrictionBranch>>,
+    forces_frozen: bool,
+    /// The time of the last evaluation, s (the force elements' branches
+    /// are checked against it).
+    last_t: f64,
     /// Sub-joints with a non-smooth law (rebuilt with the layout).
     nonsmooth: Vec<u32>,
     /// The last elimination met a negative pivot: the tangent with the
@@ -245,6 +254,9 @@ impl Chain {
             base_load: V6::ZERO,
             branch: Vec::new(),
             frozen: false,
+            force_branch: Vec::new(),
+            forces_frozen: false,
+            last_t: 0.0,
             nonsmooth: Vec::new(),
             indefinite: false,
             definite_tangent: false,

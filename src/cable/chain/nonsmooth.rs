@@ -76,6 +76,10 @@ impl SecondOrderSystem for Chain {
         self.pairs.is_empty() && self.forces.is_empty()
     }
     fn freeze_branches(&mut self, start: (&[f64], &[f64]), predicted: (&[f64], &[f64])) {
+        // Force elements (contacts' friction): each held on the branch it
+        // is on at the solve's first evaluation, the predictor.
+        self.force_branch.clear();
+        self.forces_frozen = !self.forces.is_empty();
         // An invalid description freezes nothing: the next evaluation
         // reports it.
         if self.assign_slots().is_err() || self.nonsmooth.is_empty() {
@@ -109,8 +113,9 @@ impl SecondOrderSystem for Chain {
         self.frozen = true;
     }
     fn update_branches(&mut self, q: &[f64], v: &[f64]) -> usize {
+        let mut moved = self.update_force_branches();
         if !self.frozen {
-            return 0;
+            return moved;
         }
         // A slack law that pulls moves to taut at once (and one that has
         // shortened past its stop to closed); a taut law moves to
@@ -120,7 +125,6 @@ impl SecondOrderSystem for Chain {
         // near zero tension (its own weight only) one element per update.
         let tol = self.position_tolerance;
         let band = tol.max(KINK_BAND);
-        let mut moved = 0;
         for i in 0..self.nonsmooth.len() {
             let s = self.nonsmooth[i] as usize;
             let limit = if self.branch[s] != LawBranch::Slack { band } else { tol };
@@ -132,13 +136,18 @@ impl SecondOrderSystem for Chain {
         moved
     }
     fn branch_disagreement(&self, q: &[f64], v: &[f64]) -> f64 {
+        // Friction's, relative to its limit, in the same measure: at
+        // `FRICTION_BAND` it is `KINK_BAND`.
+        let friction = self.force_disagreements().fold(0.0, f64::max) * (KINK_BAND / FRICTION_BAND);
         if !self.frozen {
-            return 0.0;
+            return friction;
         }
-        self.nonsmooth.iter().map(|&s| self.disagreement(s as usize, q, v)).fold(0.0, f64::max)
+        self.nonsmooth.iter().map(|&s| self.disagreement(s as usize, q, v)).fold(friction, f64::max)
     }
     fn release_branches(&mut self) {
         self.frozen = false;
+        self.forces_frozen = false;
+        self.force_branch.clear();
     }
     /// A chain with force elements ([`Chain::forces`]): a stiff one can
     /// whip a payload about at 100 g, where the inertia terms the O(n)
@@ -161,7 +170,49 @@ impl SecondOrderSystem for Chain {
     }
 }
 
+/// How far (relative to its limit) a force element's friction may lie
+/// outside the branch it is held on and the solve still accepted
+/// ([`ForceElement::branch_disagreement`]): a contact held sticking whose
+/// trial force is 0.1 % over `μ F_n`, or held slipping 0.1 % under it.
+/// Beyond it, [`SecondOrderSystem::update_branches`] moves it to the
+/// branch the solution is on.
+pub const FRICTION_BAND: f64 = 1e-3;
+
 impl Chain {
+    /// Each held force element's disagreement with its branch at the last
+    /// evaluation ([`ForceElement::branch_disagreement`]).
+    fn force_disagreements(&self) -> impl Iterator<Item = f64> + '_ {
+        let held = self.forces_frozen && self.force_branch.len() == self.forces.len();
+        let t = self.last_t;
+        self.forces
+            .iter()
+            .zip(self.force_element_points())
+            .zip(&self.force_branch)
+            .filter(move |_| held)
+            .filter_map(move |((fe, at), b)| b.map(|b| fe.element.branch_disagreement(t, &at, b)))
+    }
+
+    /// Moves each held force element whose law the last evaluation puts
+    /// beyond [`FRICTION_BAND`] of its branch to the branch it is on
+    /// there; returns how many moved.
+    fn update_force_branches(&mut self) -> usize {
+        if !(self.forces_frozen && self.force_branch.len() == self.forces.len()) {
+            return 0;
+        }
+        let t = self.last_t;
+        let mut moved = 0;
+        let points: Vec<PointState> = self.force_element_points().collect();
+        for ((fe, at), b) in self.forces.iter().zip(&points).zip(self.force_branch.iter_mut()) {
+            if let Some(held) = *b {
+                if fe.element.branch_disagreement(t, at, held) > FRICTION_BAND {
+                    *b = fe.element.branch(t, at);
+                    moved += 1;
+                }
+            }
+        }
+        moved
+    }
+
     /// A Newton correction `dq = scale·dx` applied link by link: each
     /// sub-link is moved by its own linearised motion `δX_s = Σ_{j≤s} S_j dq_j` (a rotation
     /// `exp(ω)` and the displacement `v + ω × p` of its origin), and the

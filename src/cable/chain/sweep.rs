@@ -3,7 +3,7 @@
 
 use super::forest::{loop_correction, LoopPair};
 use super::*;
-use crate::cable::force::{point_to_spatial, ForceElement, PointState, PointWrench};
+use crate::cable::force::{point_to_spatial, ForceElement, FrictionBranch, PointState, PointWrench};
 use crate::cable::spatial::{skew, M6, V6};
 use crate::integrate::SystemError;
 use glam::{DMat3, DQuat, DVec3};
@@ -348,11 +348,31 @@ impl Chain {
         }
         for an in &self.anchors {
             let slot = self.link_slot[an.link] as usize;
-            apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[an.link], self.origin, an.local_point, t, an);
+            apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[an.link], self.origin, an.local_point, t, an, None);
         }
-        for fe in &self.forces {
+        self.last_t = t;
+        if self.forces_frozen && self.force_branch.len() != self.forces.len() {
+            // The solve's first evaluation: each law held on the branch it
+            // is on here.
+            self.force_branch.clear();
+            for fe in &self.forces {
+                let (at, _) = point_state(&self.poses[fe.link], self.origin, fe.local_point);
+                self.force_branch.push(fe.element.branch(t, &at));
+            }
+        }
+        for (k, fe) in self.forces.iter().enumerate() {
             let slot = self.link_slot[fe.link] as usize;
-            apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[fe.link], self.origin, fe.local_point, t, fe.element.as_ref());
+            let held = if self.forces_frozen { self.force_branch[k] } else { None };
+            apply_force_element(
+                &mut self.links[slot],
+                &mut self.anchor_blocks,
+                &self.poses[fe.link],
+                self.origin,
+                fe.local_point,
+                t,
+                fe.element.as_ref(),
+                held,
+            );
         }
         // Pair elements: each point's force on its link (with its
         // moment-arm tangent); their stiffness and damping are the solve's
@@ -914,7 +934,8 @@ pub(super) fn point_state(ps: &Pose, origin: DVec3, local_point: DVec3) -> (Poin
     (PointState { rotation: ps.rot, point: p + origin, velocity: ps.vel.bot + ps.vel.top.cross(p), angular_velocity: ps.vel.top }, p)
 }
 
-/// Evaluates a force element at `local_point` of the link at `ps` and adds
+/// Evaluates a force element at `local_point` of the link at `ps` (its
+/// law held on `held`, if given: [`ForceElement::wrench_on`]) and adds
 /// its wrench to the link's load, the moment-arm tangent to the link's load
 /// tangent, and its stiffness and damping (moved to the spatial frame) to
 /// the link's implicit blocks.
@@ -927,9 +948,13 @@ pub(super) fn apply_force_element(
     local_point: DVec3,
     t: f64,
     element: &dyn ForceElement,
+    held: Option<FrictionBranch>,
 ) {
     let (at, p) = point_state(ps, origin, local_point);
-    let w = element.wrench(t, &at);
+    let w = match held {
+        Some(branch) => element.wrench_on(t, &at, branch),
+        None => element.wrench(t, &at),
+    };
     add_point_wrench(ls, blocks, p + w.arm, &w);
 }
 
