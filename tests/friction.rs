@@ -96,11 +96,13 @@ fn sticking_friction_tangents_are_the_derivatives_of_its_wrench() {
 
 /// A contact's friction held on a branch within a Newton solve
 /// ([`ForceElement::wrench_on`]): on the branch it is on, the held law is
-/// the law itself (its wrench and tangents to the bit); held sticking past
-/// `μ F_n` it gives the stick spring's trial force, and held slipping
-/// inside the limit `μ F_n` along the trial force; and
+/// the law itself (its wrench to the bit); held sticking past `μ F_n` it
+/// gives the stick spring's trial force; held slipping, `μ F_n` along the
+/// held direction (in the contact's plane) wherever the trial force
+/// points, with no tangential stiffness; and
 /// [`ForceElement::branch_disagreement`] is how far, relative to `μ F_n`,
-/// the trial force lies outside the held branch (0 on its own).
+/// the trial force lies outside the held branch (0 on its own; its
+/// direction's chord from the held one while slipping).
 #[test]
 fn friction_held_on_a_branch_is_its_law_there_and_says_how_far_it_is_outside() {
     let mu = 0.5;
@@ -108,21 +110,27 @@ fn friction_held_on_a_branch_is_its_law_there_and_says_how_far_it_is_outside() {
     let k_t = CoulombFriction::from_law(mu, &law(), DVec3::ZERO, &at(DVec3::ZERO, DMat3::IDENTITY), 1e9).unwrap().stiffness;
     let pressed = |dx: f64| at(DVec3::new(dx, 0.05 - 3e-6, 0.0), DMat3::IDENTITY);
     let limit = mu * c.normal_force(0.0, &pressed(0.0));
-    // Stretched to 40 % and to 250 % of the limit.
+    // Stretched along +x to 40 % and to 250 % of the limit: the trial
+    // force points along −x.
     let (inside, outside) = (pressed(0.4 * limit / k_t), pressed(2.5 * limit / k_t));
     assert_eq!(c.branch(0.0, &inside), Some(FrictionBranch::Stick));
-    assert_eq!(c.branch(0.0, &outside), Some(FrictionBranch::Slip));
+    assert_eq!(c.branch(0.0, &outside), Some(FrictionBranch::Slip(DVec3::NEG_X)));
     assert_eq!(c.branch(0.0, &at(DVec3::new(0.0, 0.06, 0.0), DMat3::IDENTITY)), None, "a contact without normal force has no branch");
-    for (state, own) in [(inside, FrictionBranch::Stick), (outside, FrictionBranch::Slip)] {
-        assert_eq!(c.wrench_on(0.0, &state, own), c.wrench(0.0, &state));
+    for (state, own) in [(inside, FrictionBranch::Stick), (outside, FrictionBranch::Slip(DVec3::NEG_X))] {
+        let (held, free) = (c.wrench_on(0.0, &state, own), c.wrench(0.0, &state));
+        assert_eq!((held.force, held.moment), (free.force, free.moment));
         assert_eq!(c.branch_disagreement(0.0, &state, own), 0.0);
     }
     let held = c.wrench_on(0.0, &outside, FrictionBranch::Stick);
     assert!((held.force.x + 2.5 * limit).abs() < 1e-9 * limit, "held sticking: {} N against the trial force {} N", held.force.x, -2.5 * limit);
     assert!((c.branch_disagreement(0.0, &outside, FrictionBranch::Stick) - 1.5).abs() < 1e-9);
-    let held = c.wrench_on(0.0, &inside, FrictionBranch::Slip);
-    assert!((held.force.x + limit).abs() < 1e-9 * limit, "held slipping: {} N against μ F_n = {limit} N", held.force.x);
-    assert!((c.branch_disagreement(0.0, &inside, FrictionBranch::Slip) - 0.6).abs() < 1e-9);
+    // Held slipping along +z (tilted out of the plane: projected on it).
+    let held = c.wrench_on(0.0, &inside, FrictionBranch::Slip(DVec3::new(0.0, 0.6, 0.8)));
+    assert!((held.force.z - limit).abs() < 1e-9 * limit && held.force.x == 0.0, "held slipping: {} N against μ F_n = {limit} N along z", held.force);
+    let frictionless = SphereContact::fixed(DVec3::ZERO, DVec3::Y, 0.05, law()).wrench(0.0, &inside);
+    assert_eq!((held.stiffness.d, held.damping.d), (frictionless.stiffness.d, frictionless.damping.d), "held slipping: no tangential stiffness or damping");
+    assert!((c.branch_disagreement(0.0, &inside, FrictionBranch::Slip(DVec3::NEG_X)) - 0.6).abs() < 1e-9);
+    assert!((c.branch_disagreement(0.0, &outside, FrictionBranch::Slip(DVec3::Z)) - 2f64.sqrt()).abs() < 1e-9);
 }
 
 /// Against a curved obstacle ([`Curve`]: a ball, or a cylinder's round

@@ -384,44 +384,62 @@ impl CoulombFriction {
 /// factor on the stick tangents (1 sticking, `μ F_n/|F_trial|` slipping),
 /// the slip direction (zero sticking), the contact point's arm from the
 /// link point, the stick spring's stretch `P (c − a)`, and the trial
-/// force's size and the limit.
+/// force and the limit.
 struct Tangential {
     force: DVec3,
     scale: f64,
     direction: DVec3,
     arm: DVec3,
     stretch: DVec3,
-    /// The trial force's size and the limit, N.
-    size: f64,
+    /// The trial force and the limit, N.
+    trial: DVec3,
     limit: f64,
 }
 
-/// The tangential part from the trial force `trial` (N) and the friction
-/// limit `limit` (N, > 0): the trial force while it sticks, `limit` along
-/// it while it slips; on the law's own branch (`forced` `None`: it sticks
-/// while `|trial| ≤ limit`) or held on `forced` (a Newton solve's frozen
-/// branch, [`ForceElement::wrench_on`]; a zero trial force sticks).
-fn saturate(trial: DVec3, limit: f64, forced: Option<FrictionBranch>, arm: DVec3, stretch: DVec3) -> Tangential {
+/// The tangential part from the trial force `trial` (N, in the contact's
+/// plane, normal `n`) and the friction limit `limit` (N, > 0): the trial
+/// force while it sticks, `limit` along it while it slips; on the law's
+/// own branch (`forced` `None`: it sticks while `|trial| ≤ limit`) or held
+/// on `forced` (a Newton solve's frozen branch,
+/// [`ForceElement::wrench_on`]): sticking, the trial force however large;
+/// slipping, `limit` along the held direction (projected on the plane),
+/// with no tangential stiffness.
+fn saturate(trial: DVec3, n: DVec3, limit: f64, forced: Option<FrictionBranch>, arm: DVec3, stretch: DVec3) -> Tangential {
     let size = trial.length();
-    let stick = match forced {
-        None => size <= limit,
-        Some(FrictionBranch::Stick) => true,
-        Some(FrictionBranch::Slip) => size == 0.0,
-    };
-    if stick {
-        Tangential { force: trial, scale: 1.0, direction: DVec3::ZERO, arm, stretch, size, limit }
-    } else {
-        let direction = trial / size;
-        Tangential { force: direction * limit, scale: limit / size, direction, arm, stretch, size, limit }
+    match forced {
+        Some(FrictionBranch::Stick) => Tangential { force: trial, scale: 1.0, direction: DVec3::ZERO, arm, stretch, trial, limit },
+        None if size <= limit => Tangential { force: trial, scale: 1.0, direction: DVec3::ZERO, arm, stretch, trial, limit },
+        None => {
+            let direction = trial / size;
+            Tangential { force: direction * limit, scale: limit / size, direction, arm, stretch, trial, limit }
+        }
+        Some(FrictionBranch::Slip(held)) => {
+            let direction = (held - n * held.dot(n)).try_normalize().unwrap_or(held);
+            Tangential { force: direction * limit, scale: 0.0, direction, arm, stretch, trial, limit }
+        }
     }
 }
 
-/// How far a trial force of size `size` (N) lies outside `branch` with
-/// the limit `limit` (N), relative to the limit ([`ForceElement::branch_disagreement`]).
-fn outside(size: f64, limit: f64, branch: FrictionBranch) -> f64 {
+/// The branch of a trial force `trial` (N) with the limit `limit` (N).
+fn branch_of(trial: DVec3, limit: f64) -> FrictionBranch {
+    let size = trial.length();
+    if size <= limit {
+        FrictionBranch::Stick
+    } else {
+        FrictionBranch::Slip(trial / size)
+    }
+}
+
+/// How far a trial force `trial` (N) lies outside `branch` with the limit
+/// `limit` (N), relative to the limit ([`ForceElement::branch_disagreement`]):
+/// beyond the limit while held sticking; within it, or turned from the
+/// held direction (the chord between the unit directions, about the
+/// angle), while held slipping.
+fn outside(trial: DVec3, limit: f64, branch: FrictionBranch) -> f64 {
+    let size = trial.length();
     match branch {
         FrictionBranch::Stick => (size - limit).max(0.0) / limit,
-        FrictionBranch::Slip => (limit - size).max(0.0) / limit,
+        FrictionBranch::Slip(held) => (limit - size).max(0.0) / limit + (trial / size - held).length().min(2.0),
     }
 }
 
@@ -505,7 +523,7 @@ impl SphereContact {
         let project = |x: DVec3| x - n * x.dot(n);
         let stretch = project(at.point + arm + turn.cross(arm) - anchor);
         let trial = -(stretch * friction.stiffness + project(slip) * friction.damping);
-        Some(saturate(trial, limit, forced, arm, stretch))
+        Some(saturate(trial, n, limit, forced, arm, stretch))
     }
 
     /// Penetration (m, > 0 inside) and its rate (m/s, > 0 approaching) at
@@ -732,7 +750,7 @@ impl PairContact {
         let project = |x: DVec3| x - n * x.dot(n);
         let stretch = project(a.point - b.point - friction.offset);
         let trial = -(stretch * friction.stiffness + project(a.velocity - b.velocity) * friction.damping);
-        Some(saturate(trial, limit, None, DVec3::ZERO, stretch))
+        Some(saturate(trial, n, limit, None, DVec3::ZERO, stretch))
     }
 }
 
@@ -858,19 +876,17 @@ impl ForceElement for SphereContact {
         self.wrench_held(t, at, Some(branch))
     }
 
-    /// Sticking or slipping while the contact presses with friction.
+    /// Sticking, or slipping along the trial force, while the contact
+    /// presses with friction.
     fn branch(&self, t: f64, at: &PointState) -> Option<FrictionBranch> {
-        if std::env::var("ZZA").is_ok() && self.friction?.normal_bound == 0.0 {
-            return None;
-        }
         let (touch, normal) = self.pressed(t, at);
         let x = self.tangential(t, at, touch.normal, normal)?;
-        Some(if x.direction == DVec3::ZERO { FrictionBranch::Stick } else { FrictionBranch::Slip })
+        Some(branch_of(x.trial, x.limit))
     }
 
     fn branch_disagreement(&self, t: f64, at: &PointState, branch: FrictionBranch) -> f64 {
         let (touch, normal) = self.pressed(t, at);
-        self.tangential(t, at, touch.normal, normal).map_or(0.0, |x| outside(x.size, x.limit, branch))
+        self.tangential(t, at, touch.normal, normal).map_or(0.0, |x| outside(x.trial, x.limit, branch))
     }
 
     fn energy(&self, t: f64, at: &PointState) -> f64 {

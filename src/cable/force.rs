@@ -105,13 +105,15 @@ pub trait ForceElement: Send + Sync {
     }
 
     /// The branch a non-smooth law is on at time `t` (s) and point state
-    /// `at` (Coulomb friction: sticking or slipping), or `None` for a
-    /// smooth law (the default) or one that is not engaged (a contact
-    /// without normal force). A Newton solve holds each law on the branch
-    /// it had at its first iterate ([`ForceElement::wrench_on`]), so that
-    /// it solves smooth equations, and moves the laws whose branch the
-    /// solution contradicts ([`ForceElement::branch_disagreement`]), as
-    /// it does a slack rope's tension-only elements
+    /// `at` (Coulomb friction: sticking, or slipping along a direction),
+    /// or `None` for a smooth law (the default) or one that is not
+    /// engaged (a contact without normal force). In a Newton solve the
+    /// chain holds a law that sticks at the first iterate sticking
+    /// ([`ForceElement::wrench_on`]), and so one whose slip turns round
+    /// between two iterates, and once the solve has converged releases
+    /// those the solution contradicts
+    /// ([`ForceElement::branch_disagreement`]), as it freezes a slack
+    /// rope's tension-only elements
     /// ([`SecondOrderSystem::freeze_branches`](crate::integrate::SecondOrderSystem::freeze_branches)).
     fn branch(&self, _t: f64, _at: &PointState) -> Option<FrictionBranch> {
         None
@@ -126,22 +128,25 @@ pub trait ForceElement: Send + Sync {
     /// How far the state at `at` lies outside `branch`, relative to the
     /// law's limit (dimensionless, 0 inside it: Coulomb friction held
     /// sticking with a trial force 1 % over `μ F_n` gives 0.01, and so
-    /// does one held slipping whose trial force is 1 % under it).
-    /// Default 0.
+    /// does one held slipping whose trial force is 1 % under it, or turned
+    /// 0.01 rad from the held direction). Default 0.
     fn branch_disagreement(&self, _t: f64, _at: &PointState, _branch: FrictionBranch) -> f64 {
         0.0
     }
 }
 
 /// The branch of a Coulomb friction law ([`ForceElement::branch`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum FrictionBranch {
     /// The stick spring holds (`|F_trial| ≤ μ F_n`): the tangential force
     /// is the trial force.
     Stick,
     /// The contact slips: the tangential force is `μ F_n` along the trial
-    /// force.
-    Slip,
+    /// force, whose direction (unit, world) this is. Held on this branch,
+    /// the force keeps that direction (in the contact's plane): a smooth
+    /// law, where the trial force's own direction swings round as the slip
+    /// velocity passes zero.
+    Slip(DVec3),
 }
 
 /// A force element on a link of a chain.

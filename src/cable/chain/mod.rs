@@ -180,6 +180,9 @@ pub struct Chain {
     /// [`SecondOrderSystem::freeze_branches`] (empty until then).
     force_branch: Vec<Option<FrictionBranch>>,
     forces_frozen: bool,
+    /// Per force element: the direction it slipped along at the last
+    /// evaluation while free (zero if it did not), in this solve.
+    slip_direction: Vec<DVec3>,
     /// The time of the last evaluation, s (the force elements' branches
     /// are checked against it).
     last_t: f64,
@@ -256,6 +259,7 @@ impl Chain {
             frozen: false,
             force_branch: Vec::new(),
             forces_frozen: false,
+            slip_direction: Vec::new(),
             last_t: 0.0,
             nonsmooth: Vec::new(),
             indefinite: false,

@@ -179,6 +179,40 @@ impl SecondOrderSystem for Chain {
 pub const FRICTION_BAND: f64 = 1e-3;
 
 impl Chain {
+    /// At each evaluation of a Newton solve on frozen branches: at the
+    /// first, every force element whose law sticks there is held sticking
+    /// (a slipping one stays free); later, a free one whose slip turned
+    /// round since the last evaluation (its trial force's direction
+    /// reversed) is held sticking from here on. A slip that reverses from
+    /// one Newton iterate to the next is Coulomb's sign switching inside
+    /// the tiny band where the stick spring's damper alone holds it
+    /// (`|c_t v| < μ F_n`, micrometres per second for steel): Newton
+    /// steps across it at every iterate, and a rope heap at rest
+    /// (2026-11-29) cycled so through every frame step. Held, the contact
+    /// settles; if the solution slips after all, `update_branches`
+    /// releases it.
+    pub(super) fn hold_force_branches(&mut self, t: f64) {
+        let first = self.force_branch.len() != self.forces.len();
+        if first {
+            self.force_branch.clear();
+            self.force_branch.resize(self.forces.len(), None);
+            self.slip_direction.clear();
+            self.slip_direction.resize(self.forces.len(), DVec3::ZERO);
+        }
+        for ((fe, held), last) in self.forces.iter().zip(self.force_branch.iter_mut()).zip(self.slip_direction.iter_mut()) {
+            if held.is_some() {
+                continue;
+            }
+            let (at, _) = super::sweep::point_state(&self.poses[fe.link], self.origin, fe.local_point);
+            match fe.element.branch(t, &at) {
+                Some(FrictionBranch::Stick) if first => *held = Some(FrictionBranch::Stick),
+                Some(FrictionBranch::Slip(d)) if d.dot(*last) < 0.0 => *held = Some(FrictionBranch::Stick),
+                Some(FrictionBranch::Slip(d)) => *last = d,
+                _ => *last = DVec3::ZERO,
+            }
+        }
+    }
+
     /// Each held force element's disagreement with its branch at the last
     /// evaluation ([`ForceElement::branch_disagreement`]).
     fn force_disagreements(&self) -> impl Iterator<Item = f64> + '_ {
@@ -205,7 +239,9 @@ impl Chain {
         for ((fe, at), b) in self.forces.iter().zip(&points).zip(self.force_branch.iter_mut()) {
             if let Some(held) = *b {
                 if fe.element.branch_disagreement(t, at, held) > FRICTION_BAND {
-                    *b = fe.element.branch(t, at);
+                    // Released: free again (a slipping law is solved on
+                    // its own law).
+                    *b = fe.element.branch(t, at).filter(|b| *b == FrictionBranch::Stick);
                     moved += 1;
                 }
             }

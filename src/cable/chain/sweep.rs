@@ -351,14 +351,8 @@ impl Chain {
             apply_force_element(&mut self.links[slot], &mut self.anchor_blocks, &self.poses[an.link], self.origin, an.local_point, t, an, None);
         }
         self.last_t = t;
-        if self.forces_frozen && self.force_branch.len() != self.forces.len() {
-            // The solve's first evaluation: each law held on the branch it
-            // is on here.
-            self.force_branch.clear();
-            for fe in &self.forces {
-                let (at, _) = point_state(&self.poses[fe.link], self.origin, fe.local_point);
-                self.force_branch.push(fe.element.branch(t, &at));
-            }
+        if self.forces_frozen {
+            self.hold_force_branches(t);
         }
         for (k, fe) in self.forces.iter().enumerate() {
             let slot = self.link_slot[fe.link] as usize;
