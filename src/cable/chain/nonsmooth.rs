@@ -76,8 +76,8 @@ impl SecondOrderSystem for Chain {
         self.pairs.is_empty() && self.forces.is_empty()
     }
     fn freeze_branches(&mut self, start: (&[f64], &[f64]), predicted: (&[f64], &[f64])) {
-        // Force elements (contacts' friction): each held on the branch it
-        // is on at the solve's first evaluation, the predictor.
+        // Force elements (contacts' friction): read at the solve's first
+        // evaluation, the predictor (`hold_force_branches`).
         self.force_branch.clear();
         self.forces_frozen = !self.forces.is_empty();
         // An invalid description freezes nothing: the next evaluation
@@ -173,9 +173,8 @@ impl SecondOrderSystem for Chain {
 /// How far (relative to its limit) a force element's friction may lie
 /// outside the branch it is held on and the solve still accepted
 /// ([`ForceElement::branch_disagreement`]): a contact held sticking whose
-/// trial force is 0.1 % over `μ F_n`, or held slipping 0.1 % under it.
-/// Beyond it, [`SecondOrderSystem::update_branches`] moves it to the
-/// branch the solution is on.
+/// trial force is 0.1 % over `μ F_n`. Beyond it,
+/// [`SecondOrderSystem::update_branches`] releases it to its own law.
 pub const FRICTION_BAND: f64 = 1e-3;
 
 impl Chain {
