@@ -549,13 +549,12 @@ impl<'a> Obstacle<'a> {
                 (origin, rotation)
             }
         };
-        let aabb = if now > start {
-            let pose = rp::Pose::from_parts(origin.as_vec3(), glam::DQuat::from_mat3(&rotation).normalize().as_quat());
-            collider.shape().compute_aabb(&pose)
+        let (lo, hi) = if now > start {
+            placed_aabb(collider, origin, rotation)
         } else {
-            collider.compute_aabb()
+            let aabb = collider.compute_aabb();
+            (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3())
         };
-        let (lo, hi) = (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3());
         let corner = |c: DVec3| (c - lo).abs().max((c - hi).abs()).length();
         let speed = match (&exact, moving) {
             (Some(b), _) => b.velocity.length() + b.angular_velocity.length() * corner(b.position),
@@ -2420,21 +2419,11 @@ pub(crate) fn carried_pairs(
     let mut pairs = Vec::new();
     let (mut touched, mut struck) = (Vec::new(), Vec::new());
     let mut approach = 0.0f64;
-    let aabb = |collider: &rp::Collider, o: DVec3, r: DMat3| {
-        let pose = rp::Pose::from_parts(o.as_vec3(), glam::DQuat::from_mat3(&r).normalize().as_quat());
-        let b = collider.shape().compute_aabb(&pose);
-        (b.mins.as_dvec3(), b.maxs.as_dvec3())
-    };
     // (collider, its pose in the world, its box)
-    fn placed<'c>(
-        list: &BodyShapes<'c>,
-        o: DVec3,
-        r: DMat3,
-        aabb: impl Fn(&rp::Collider, DVec3, DMat3) -> (DVec3, DVec3),
-    ) -> Vec<(&'c rp::Collider, DVec3, DMat3, (DVec3, DVec3))> {
-        list.colliders.iter().map(|&(c, lt, lr)| (c, o + r * lt, r * lr, aabb(c, o + r * lt, r * lr))).collect()
+    fn placed<'c>(list: &BodyShapes<'c>, o: DVec3, r: DMat3) -> Vec<(&'c rp::Collider, DVec3, DMat3, (DVec3, DVec3))> {
+        list.colliders.iter().map(|&(c, lt, lr)| (c, o + r * lt, r * lr, placed_aabb(c, o + r * lt, r * lr))).collect()
     }
-    let free = placed(shapes, origin, rotation, aabb);
+    let free = placed(shapes, origin, rotation);
     for c in carried.iter().filter(|c| !leave.contains(&c.body)) {
         let Some(rb) = bodies.get(c.body) else {
             continue;
@@ -2444,7 +2433,7 @@ pub(crate) fn carried_pairs(
         };
         let (p, r, v, w) = cable.model.body_state(&c.place);
         let mine_shapes = BodyShapes::of(rb, colliders);
-        let mine = placed(&mine_shapes, p, r, aabb);
+        let mine = placed(&mine_shapes, p, r);
         let closing = speed + v.length() + w.length() * body_extent(rb, colliders);
         let reach = 2.0 * h * closing + h * h * gravity + 0.01;
         let pad = DVec3::splat(reach);
@@ -2515,6 +2504,14 @@ pub(crate) fn carried_pairs(
     CarriedPairs { pairs, approach, touched, struck }
 }
 
+/// The world box (min, max corners, m) of `collider`'s shape placed at
+/// `origin` turned by `rotation`.
+fn placed_aabb(collider: &rp::Collider, origin: DVec3, rotation: DMat3) -> (DVec3, DVec3) {
+    let pose = rp::Pose::from_parts(origin.as_vec3(), glam::DQuat::from_mat3(&rotation).normalize().as_quat());
+    let aabb = collider.shape().compute_aabb(&pose);
+    (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3())
+}
+
 /// What [`carried_pairs`] found.
 pub(crate) struct CarriedPairs {
     /// The pairs.
@@ -2553,11 +2550,7 @@ pub(crate) fn body_pairs(
     let gravity = cable.model.chain.gravity.length();
     let mut pairs = Vec::new();
     let mut approach: f64 = 0.0;
-    let aabb_at = |collider: &rp::Collider, lt: DVec3, lr: DMat3| {
-        let pose = rp::Pose::from_parts((origin + rotation * lt).as_vec3(), glam::DQuat::from_mat3(&(rotation * lr)).normalize().as_quat());
-        let aabb = collider.shape().compute_aabb(&pose);
-        (aabb.mins.as_dvec3(), aabb.maxs.as_dvec3())
-    };
+    let aabb_at = |collider: &rp::Collider, lt: DVec3, lr: DMat3| placed_aabb(collider, origin + rotation * lt, rotation * lr);
     // The whole cable's box, padded by its fastest node's reach, first
     // (each rope's own test below is within it: the same collider boxes,
     // a smaller box and pad).
