@@ -879,6 +879,9 @@ impl ForceElement for SphereContact {
     /// Sticking, or slipping along the trial force, while the contact
     /// presses with friction.
     fn branch(&self, t: f64, at: &PointState) -> Option<FrictionBranch> {
+        // (A frictionless contact has none: not worth finding its touch
+        // at every evaluation.)
+        self.friction?;
         let (touch, normal) = self.pressed(t, at);
         let x = self.tangential(t, at, touch.normal, normal)?;
         Some(branch_of(x.trial, x.limit))
