@@ -41,6 +41,17 @@ pub struct CableContact {
     /// rapier's defaults, the mean of the two. 0 on both sides:
     /// frictionless.
     pub friction: f64,
+    /// The rope's collision groups, as a rapier collider's (the same
+    /// groups for rapier's collision and solver tests): the rope touches a
+    /// collider only if these pass rapier's test
+    /// ([`InteractionGroups::test`](rp::InteractionGroups::test)) against
+    /// both the collider's collision groups and its solver groups, and
+    /// another cable only if the two cables' groups pass it. Its own
+    /// elements always meet (self contact). Default
+    /// [`InteractionGroups::all`](rp::InteractionGroups::all), a rapier
+    /// collider's default: it touches every collider that keeps its
+    /// default groups.
+    pub groups: rp::InteractionGroups,
 }
 
 impl CableContact {
@@ -52,7 +63,19 @@ impl CableContact {
     /// Coulomb friction 0.3 (SCENARIO.md's default; see
     /// [`CableContact::with_friction`]). `diameter` m.
     pub fn steel(diameter: f64, element_mass: f64) -> Result<Self, ContactError> {
-        Ok(CableContact { law: steel_law(0.5 * diameter, element_mass)?, friction: 0.3 })
+        Ok(CableContact { law: steel_law(0.5 * diameter, element_mass)?, friction: 0.3, groups: rp::InteractionGroups::all() })
+    }
+
+    /// The same with the rope's collision groups `groups` (see
+    /// [`CableContact::groups`]).
+    pub fn with_groups(self, groups: rp::InteractionGroups) -> Self {
+        CableContact { groups, ..self }
+    }
+
+    /// Whether the rope touches `collider` at all: its groups pass rapier's
+    /// test against the collider's collision groups and its solver groups.
+    pub fn touches(&self, collider: &rp::Collider) -> bool {
+        self.groups.test(collider.collision_groups()) && self.groups.test(collider.solver_groups())
     }
 
     /// The same with the rope's friction coefficient `mu` (≥ 0, finite).
@@ -62,6 +85,14 @@ impl CableContact {
         }
         Ok(CableContact { friction: mu, ..self })
     }
+}
+
+/// Whether two colliders touch in the island's own contacts (a carried or
+/// free body against a collider, or against another body): rapier's test of
+/// their collision groups and of their solver groups, as rapier filters
+/// the contacts it solves.
+fn colliders_touch(a: &rp::Collider, b: &rp::Collider) -> bool {
+    a.collision_groups().test(b.collision_groups()) && a.solver_groups().test(b.solver_groups())
 }
 
 /// Two friction coefficients combined as rapier combines two colliders'
@@ -581,6 +612,7 @@ impl<'a> Obstacle<'a> {
         exclude: &[rp::RigidBodyHandle],
         (now, start): (f64, f64),
         region: Option<(DVec3, DVec3)>,
+        rope: Option<&CableContact>,
     ) -> Vec<Obstacle<'a>> {
         let outside = |c: &rp::Collider| {
             let Some((lo, hi)) = region else {
@@ -607,7 +639,7 @@ impl<'a> Obstacle<'a> {
                 // (`body_pairs`), or a carried body's link.
                 let dynamic =
                     c.parent().and_then(|p| bodies.get(p)).is_some_and(|rb| rb.is_dynamic()) && !c.parent().is_some_and(|p| world.jointed.contains(&p));
-                !c.is_sensor() && !dynamic && !c.parent().is_some_and(|p| exclude.contains(&p))
+                !c.is_sensor() && !dynamic && !c.parent().is_some_and(|p| exclude.contains(&p)) && rope.is_none_or(|r| r.touches(c))
             })
             .map(|(h, c)| Obstacle::new(h, c, world, bodies, now, start))
             .collect()
@@ -1034,7 +1066,7 @@ pub(crate) fn add_contacts(
     let fastest_change = accelerations.iter().flatten().fold(gravity, |m, a| m.max(*a));
     let widest = 2.0 * radius + 2.0 * h * extent.fastest + h * h * fastest_change;
     let region = (extent.lo - DVec3::splat(widest), extent.hi + DVec3::splat(widest));
-    let obstacles = Obstacle::all(world, bodies, exclude, (cable.time(), start), Some(region));
+    let obstacles = Obstacle::all(world, bodies, exclude, (cable.time(), start), Some(region), Some(contact));
     for ((rope, nodes, velocities), accelerations) in ropes.into_iter().zip(accelerations) {
         let Some(view) = cable.rope(rope) else {
             continue;
@@ -1507,7 +1539,7 @@ pub(crate) fn add_body_contacts(
             region = (region.0.min(point - pad), region.1.max(point + pad));
         }
     }
-    let obstacles = Obstacle::all(world, bodies, exclude, (cable.time(), start), Some(region));
+    let obstacles = Obstacle::all(world, bodies, exclude, (cable.time(), start), Some(region), None);
     let mut hits: Vec<AttachedForce> = Vec::new();
     for (rb, touch) in &touches {
         approach = approach.max(touch.add(rb, world.colliders, &obstacles, memory, gravity, h, &mut hits));
@@ -1536,7 +1568,7 @@ impl BodyTouch {
     /// them.
     fn points(&self, rb: &rp::RigidBody, colliders: &rp::ColliderSet) -> Vec<(DVec3, f64, f64)> {
         let (p, r, v, w) = self.state;
-        body_touch_points(rb, colliders).into_iter().map(|(q, radius)| (p + r * q, radius, (v + w.cross(r * q)).length())).collect()
+        body_touch_points(rb, colliders).into_iter().map(|(q, radius, _)| (p + r * q, radius, (v + w.cross(r * q)).length())).collect()
     }
 
     /// Pushes onto `hits` a [`SphereContact`] for each touch point
@@ -1568,7 +1600,7 @@ impl BodyTouch {
                 continue;
             }
             let points = placed_touch_points(collider);
-            for obstacle in obstacles {
+            for obstacle in obstacles.iter().filter(|o| colliders_touch(collider, o.collider)) {
                 let (cmin, cmax) = obstacle.aabb();
                 let co = obstacle.collider;
                 let mu = combine(collider.friction() as f64, co.friction() as f64, collider.friction_combine_rule(), co.friction_combine_rule());
@@ -1652,9 +1684,12 @@ pub(crate) fn out_of_obstacles(
     let Some(rb) = bodies.get(handle) else {
         return origin;
     };
-    let obstacles = Obstacle::all(world, bodies, &[handle], (now, now), None);
+    let obstacles = Obstacle::all(world, bodies, &[handle], (now, now), None, None);
     let points = body_touch_points(rb, world.colliders);
-    moved_out((origin, rotation), &points, &obstacles, GROUNDED_DEPTH, |obstacle, p, radius| {
+    moved_out((origin, rotation), &points, &obstacles, GROUNDED_DEPTH, |obstacle, p, radius, own| {
+        if !colliders_touch(own, obstacle.collider) {
+            return None;
+        }
         let (cmin, cmax) = obstacle.aabb();
         if (p - radius).cmpgt(cmax).any() || (p + radius).cmplt(cmin).any() {
             return None;
@@ -1664,31 +1699,37 @@ pub(crate) fn out_of_obstacles(
 }
 
 /// The touch points ([`placed_touch_points`]) of `rb`'s non-sensor
-/// colliders, in its frame (m), each with its radius (m).
-fn body_touch_points(rb: &rp::RigidBody, colliders: &rp::ColliderSet) -> Vec<(DVec3, f64)> {
-    rb.colliders().iter().filter_map(|c| colliders.get(*c)).filter(|c| !c.is_sensor()).flat_map(placed_touch_points).collect()
+/// colliders, in its frame (m), each with its radius (m) and its collider.
+fn body_touch_points<'c>(rb: &rp::RigidBody, colliders: &'c rp::ColliderSet) -> Vec<(DVec3, f64, &'c rp::Collider)> {
+    rb.colliders()
+        .iter()
+        .filter_map(|c| colliders.get(*c))
+        .filter(|c| !c.is_sensor())
+        .flat_map(|c| placed_touch_points(c).into_iter().map(move |(q, radius)| (q, radius, c)))
+        .collect()
 }
 
 /// A body's frame `origin` (turned by `rotation`) moved out of `surfaces`
 /// along the normal of its deepest touch point (`points`, body frame, with
-/// their radii), up to four times, while that depth is positive and at
-/// most `limit` (m): `depth(surface, point, radius)` gives a world touch
-/// point's depth into a surface and the surface's outward world normal
-/// there. The surfaces are searched in order, each over every point; the
+/// their radii and colliders), up to four times, while that depth is
+/// positive and at most `limit` (m): `depth(surface, point, radius,
+/// collider)` gives a world touch point's depth into a surface and the
+/// surface's outward world normal there (`None`: no touch, or the two
+/// colliders' groups keep them apart). The surfaces are searched in order, each over every point; the
 /// first of equal depths wins.
 fn moved_out<S>(
     (origin, rotation): (DVec3, DMat3),
-    points: &[(DVec3, f64)],
+    points: &[(DVec3, f64, &rp::Collider)],
     surfaces: &[S],
     limit: f64,
-    depth: impl Fn(&S, DVec3, f64) -> Option<(f64, DVec3)>,
+    depth: impl Fn(&S, DVec3, f64, &rp::Collider) -> Option<(f64, DVec3)>,
 ) -> DVec3 {
     let mut origin = origin;
     for _ in 0..4 {
         let mut deepest: Option<(f64, DVec3)> = None;
         for surface in surfaces {
-            for (q, radius) in points {
-                if let Some((d, normal)) = depth(surface, origin + rotation * *q, *radius) {
+            for (q, radius, own) in points {
+                if let Some((d, normal)) = depth(surface, origin + rotation * *q, *radius, own) {
                     if d > deepest.map_or(0.0, |d| d.0) {
                         deepest = Some((d, normal));
                     }
@@ -1734,7 +1775,10 @@ pub(crate) fn out_of_carried(
             surfaces.extend(BodyShapes::of(body, colliders).colliders.into_iter().map(|(co, lt, lr)| (co, p + r * lt, r * lr)));
         }
     }
-    moved_out((origin, rotation), &points, &surfaces, f64::INFINITY, |&(co, o, r), at, radius| {
+    moved_out((origin, rotation), &points, &surfaces, f64::INFINITY, |&(co, o, r), at, radius, own| {
+        if !colliders_touch(own, co) {
+            return None;
+        }
         nearest(co.shape(), r.transpose() * (at - o)).map(|(_, normal, d)| (radius - d, r * normal))
     })
 }
@@ -1770,7 +1814,7 @@ pub(crate) fn add_free_body_contacts(
         link: crate::cable::FreeBody::LINK,
         place: (DVec3::ZERO, DMat3::IDENTITY),
     };
-    let obstacles = Obstacle::all(world, bodies, &[handle], (now, start), None);
+    let obstacles = Obstacle::all(world, bodies, &[handle], (now, start), None, None);
     let mut hits = Vec::new();
     touch.add(rb, world.colliders, &obstacles, memory, body.chain.gravity.length(), h, &mut hits);
     let chain = &mut body.chain;
@@ -2197,6 +2241,9 @@ pub(crate) fn rope_pairs(cables: &[(&Cable, &CableContact)], accelerations: &[&[
             if (gi.cable == gj.cable) != within {
                 continue;
             }
+            if gi.cable != gj.cable && !cables[gi.cable].1.groups.test(cables[gj.cable].1.groups) {
+                continue;
+            }
             let same_rope = gi.cable == gj.cable && gi.rope == gj.rope;
             if same_rope && too_near_along(gi.element.abs_diff(gj.element), gi.element_length, gi.radius) {
                 continue;
@@ -2454,7 +2501,7 @@ pub(crate) fn carried_pairs(
         };
         for &(mc, mo, mr, (mlo, mhi)) in &mine {
             for &(fc, fo, fr, (flo, fhi)) in &free {
-                if (mlo - pad).cmpgt(fhi).any() || (mhi + pad).cmplt(flo).any() {
+                if !colliders_touch(mc, fc) || (mlo - pad).cmpgt(fhi).any() || (mhi + pad).cmplt(flo).any() {
                     continue;
                 }
                 let mu = combine(mc.friction() as f64, fc.friction() as f64, mc.friction_combine_rule(), fc.friction_combine_rule());
@@ -2575,7 +2622,7 @@ pub(crate) fn body_pairs(
         let fastest = velocities.iter().map(|v| v.length()).fold(0.0, f64::max);
         let pad = DVec3::splat(radius + 2.0 * h * (fastest + speed) + h * h * gravity);
         let (rope_lo, rope_hi) = nodes.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(l, u), p| (l.min(*p), u.max(*p)));
-        for &(collider, lt, lr) in &body.colliders {
+        for &(collider, lt, lr) in body.colliders.iter().filter(|(c, _, _)| contact.touches(c)) {
             let (co, cr) = (origin + rotation * lt, rotation * lr);
             let mu = combine(contact.friction, collider.friction() as f64, rp::CoefficientCombineRule::Average, collider.friction_combine_rule());
             let (lo, hi) = aabb_at(collider, lt, lr);

@@ -151,8 +151,10 @@ pub struct CableDescriptor {
     /// own) by steel-on-steel Hertz contact
     /// ([`CableContact::steel`](crate::coupling::CableContact::steel)),
     /// inside the implicit solve, with Coulomb friction
-    /// ([`CableDescriptor::friction`]). Dynamic bodies pass through the
-    /// rope for now.
+    /// ([`CableDescriptor::friction`]); a dynamic body that reaches the
+    /// rope is solved with it for that step, and other ropes and the
+    /// rope's own elements are met too. Which colliders and ropes it meets:
+    /// [`CableDescriptor::collision_groups`].
     pub contacts: bool,
     /// The rope's Coulomb friction coefficient (default 0.3), combined
     /// with each collider's bevy_rapier `Friction` as rapier combines two
@@ -160,6 +162,16 @@ pub struct CableDescriptor {
     /// sticks while the friction force stays below the coefficient times
     /// the normal force, and slips at that force beyond it.
     pub friction: f64,
+    /// The rope's collision groups, as on a bevy_rapier collider (default
+    /// `CollisionGroups::default()`: member of every group, meets every
+    /// group, like a collider without the component). The rope touches a
+    /// collider only if rapier's test passes between these and both the
+    /// collider's `CollisionGroups` and its `SolverGroups` (both ways:
+    /// each one's memberships meet the other's filters), and another rope
+    /// only if it passes between the two ropes' groups. A rope always
+    /// meets itself. Contacts between the bodies a rope carries and other
+    /// colliders follow those colliders' own groups, as in rapier.
+    pub collision_groups: bevy_rapier3d::prelude::CollisionGroups,
 }
 
 /// A constant point load on a cable (world frame).
@@ -265,6 +277,7 @@ impl CableDescriptor {
             static_start: None,
             contacts: true,
             friction: 0.3,
+            collision_groups: bevy_rapier3d::prelude::CollisionGroups::default(),
         }
     }
 
@@ -384,6 +397,15 @@ impl CableDescriptor {
     /// is refused when the cable is built, with its name.
     pub fn friction(mut self, mu: f64) -> Self {
         self.friction = mu;
+        self
+    }
+
+    /// Sets the rope's collision groups (default: every group); see
+    /// [`CableDescriptor::collision_groups`]. For example a crane's hoist
+    /// rope that should pass through its own boom: put the boom's collider
+    /// in a group the rope's filter leaves out.
+    pub fn collision_groups(mut self, groups: bevy_rapier3d::prelude::CollisionGroups) -> Self {
+        self.collision_groups = groups;
         self
     }
 

@@ -151,6 +151,7 @@ pub(crate) fn init_cables(
         let contact = if d.contacts {
             match CableContact::steel(d.material.diameter(), d.material.section().linear_density * d.length / d.segments.max(1) as f64)
                 .and_then(|k| k.with_friction(d.friction))
+                .map(|k| k.with_groups(d.collision_groups.into()))
             {
                 Ok(k) => Some(k),
                 Err(e) => {
