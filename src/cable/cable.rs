@@ -412,8 +412,8 @@ impl Cable {
             let w_new = r.transpose() * w;
             [w_new.z, w_new.y, w_new.x]
         };
-        if let Some(j) = self.model.chain.joint_mut_same_layout(s0) {
-            j.pre_rotation *= r;
+        if let Some(turned) = self.model.chain.joints().get(s0).map(|j| j.pre_rotation * r) {
+            self.model.chain.set_pre_rotation_same_layout(s0, turned);
         }
         q[s0..s0 + 3].iter_mut().for_each(|x| *x = 0.0);
         let new = to_new(&self.state.v[s0..s0 + 3]);

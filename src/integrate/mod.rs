@@ -43,5 +43,6 @@ pub use self::integrator::{Integrator, StepStats, Substeps, CALM_ITERATIONS, CAL
 pub use self::newton::{NewtonSettings, CHORD_LIMIT, KINK_BAND, LAST_RESORT_BRANCH_UPDATES, MAX_BRANCH_UPDATES, PATIENT_BUDGET};
 pub use self::pendulum::Pendulum;
 pub use self::scheme::{stability_limit, AlphaParameters, Scheme, SchemeError, SchemeParams};
+pub(crate) use self::state::all_finite;
 pub use self::state::State;
 pub use self::system::{EnergyBalance, LinearisationLimits, SecondOrderSystem, SystemError};

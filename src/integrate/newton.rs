@@ -8,6 +8,7 @@
 
 use super::error::IntegrateError;
 use super::integrator::{StepStats, Workspace};
+use super::state::all_finite;
 use super::system::SecondOrderSystem;
 
 /// Newton control for the implicit schemes.
@@ -405,7 +406,7 @@ fn pass<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, map: Aff
         .map_err(|source| Failure::Error(IntegrateError::System { t, source }))?;
     stats.residual_evals += 1;
     stats.solves += 1;
-    if !ws.r.iter().all(|x| x.is_finite()) {
+    if !all_finite(&ws.r) {
         return Err(IntegrateError::NonFinite { t }.into());
     }
     Ok(())
@@ -423,7 +424,7 @@ fn chord_pass<S: SecondOrderSystem + ?Sized>(sys: &mut S, ws: &mut Workspace, ma
     for r in ws.r.iter_mut() {
         *r = -*r;
     }
-    if !ws.r.iter().all(|x| x.is_finite()) {
+    if !all_finite(&ws.r) {
         return Err(IntegrateError::NonFinite { t }.into());
     }
     if !sys.resolve_last_tangent(&ws.r, &mut ws.dx) {

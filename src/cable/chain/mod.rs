@@ -136,6 +136,9 @@ pub struct Chain {
     limb_acc: Vec<V6>,
     /// Per sub-joint (only when there are limbs): `true` where a limb starts.
     limb_start: Vec<bool>,
+    /// Per sub-joint, what the kinematics pass needs to know of its
+    /// constant geometry ([`joint_code`]): built with the layout.
+    joint_code: Vec<u8>,
     /// Per sub-joint: index of the rotation spring whose block starts here,
     /// [`BLOCK_INNER`] inside a block, `u32::MAX` for a single sub-joint.
     pub(crate) block: Vec<u32>,
@@ -242,6 +245,7 @@ impl Chain {
             limb_carry: Vec::new(),
             limb_acc: Vec::new(),
             limb_start: Vec::new(),
+            joint_code: Vec::new(),
             block: vec![u32::MAX; n],
             rot_scratch: Vec::new(),
             spring_order: Vec::new(),
@@ -312,6 +316,8 @@ impl Chain {
         self.slot_key.springs.clear();
         self.slot_key.springs.extend(self.rotation_springs.iter().map(|r| r.first));
         self.slot_key.limbs.clone_from(&self.limbs);
+        self.joint_code.clear();
+        self.joint_code.extend(self.joints.iter().map(joint_code));
         self.limb_parent.clear();
         self.limb_start.clear();
         let mut parents = 0u32;
@@ -466,9 +472,24 @@ impl Chain {
 
     /// Sub-joint `s` to edit without rebuilding the layout: for the
     /// per-step drives and damping the coupling sets, which change neither a
-    /// law nor whether a link has mass.
+    /// law nor whether a link has mass, nor the joint's axis, offset or
+    /// pre-rotation (the layout keeps a code of those:
+    /// [`Chain::set_pre_rotation_same_layout`] changes the last).
+    #[cfg_attr(not(feature = "rapier"), allow(dead_code))] // the coupling's drives
     pub(crate) fn joint_mut_same_layout(&mut self, s: usize) -> Option<&mut SubJoint> {
         self.joints.get_mut(s)
+    }
+
+    /// Sets sub-joint `s`'s pre-rotation without rebuilding the layout (a
+    /// rope's Euler angles recharted), keeping the layout's code of it.
+    pub(crate) fn set_pre_rotation_same_layout(&mut self, s: usize, rotation: DMat3) {
+        if let Some(j) = self.joints.get_mut(s) {
+            j.pre_rotation = rotation;
+            let code = joint_code(j);
+            if let Some(c) = self.joint_code.get_mut(s) {
+                *c = code;
+            }
+        }
     }
 
     /// The generalized forces (drives) on the sub-joints, one per
@@ -993,3 +1014,24 @@ impl Chain {
         out
     }
 }
+
+/// What the kinematics pass needs to know of a sub-joint's constant
+/// geometry, in one byte: its axis class ([`sweep::axis_id`], bits 0–1),
+/// whether it has a pre-rotation (bit 2, [`JOINT_TURNED`]) and an offset
+/// (bit 3, [`JOINT_OFFSET`]). Tested once per layout instead of nine and
+/// three float compares per sub-joint and pass.
+fn joint_code(j: &SubJoint) -> u8 {
+    let mut code = sweep::axis_id(j.axis);
+    if j.pre_rotation != DMat3::IDENTITY {
+        code |= JOINT_TURNED;
+    }
+    if j.offset != DVec3::ZERO {
+        code |= JOINT_OFFSET;
+    }
+    code
+}
+
+/// [`joint_code`]'s bit for a sub-joint with a pre-rotation.
+const JOINT_TURNED: u8 = 4;
+/// [`joint_code`]'s bit for a sub-joint with an offset.
+const JOINT_OFFSET: u8 = 8;

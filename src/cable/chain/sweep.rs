@@ -5,7 +5,7 @@ use super::forest::{loop_correction, LoopPair};
 use super::*;
 use crate::cable::force::{point_to_spatial, ForceElement, FrictionBranch, PointState, PointWrench};
 use crate::cable::spatial::{skew, M6, V6};
-use crate::integrate::SystemError;
+use crate::integrate::{all_finite, SystemError};
 use glam::{DMat3, DQuat, DVec3};
 
 /// Carry of the tip-to-base sweep that a limb hands to its parent link:
@@ -153,9 +153,12 @@ impl Chain {
                     }
                 }
             }
-            let (rj, pj) = j.frame(prev_rot, prev_pos);
+            // `SubJoint::frame` with its tests read from the layout's code.
+            let code = self.joint_code[s];
+            let rj = if code & JOINT_TURNED != 0 { prev_rot * j.pre_rotation } else { prev_rot };
+            let pj = if code & JOINT_OFFSET != 0 { prev_pos + prev_rot * j.offset } else { prev_pos };
             // Principal axes (every rope sub-joint) are column picks.
-            let axis_id = axis_id(j.axis);
+            let axis_id = code & 3;
             let aw = match axis_id {
                 0 => rj.x_axis,
                 1 => rj.y_axis,
@@ -320,9 +323,8 @@ impl Chain {
     /// A NaN or infinity in `q`, `v` or `a`, by the first coordinate that
     /// holds one.
     pub(super) fn check_finite(q: &[f64], v: &[f64], a: &[f64]) -> Result<(), SystemError> {
-        // One cheap pass: a NaN or infinity anywhere makes the sum non-finite
-        // (then find which coordinate, for the message).
-        if !(q.iter().sum::<f64>() + v.iter().sum::<f64>() + a.iter().sum::<f64>()).is_finite() {
+        // One cheap pass (then find which coordinate, for the message).
+        if !(all_finite(q) && all_finite(v) && all_finite(a)) {
             if let Some(index) = q.iter().chain(v).chain(a).position(|x| !x.is_finite()) {
                 return Err(SystemError::NonFinite { index: index % q.len().max(1) });
             }
