@@ -125,7 +125,7 @@ fn driven_joints_give_the_same_rows() {
 }
 
 /// The shipped scenarios compared below, one test each.
-const COMPARED: [&str; 35] = [
+const COMPARED: [&str; 36] = [
     "axial_bounce",
     "ball_hits_payload",
     "ball_on_rope",
@@ -136,6 +136,7 @@ const COMPARED: [&str; 35] = [
     "cantilever_tip_load",
     "capstan_friction",
     "catenary",
+    "collision_groups",
     "crane_pid",
     "crane_pid_incremental",
     "crane_pid_nonlinear",
@@ -191,6 +192,7 @@ same_rows!(
     cantilever_end_moment,
     cantilever_tip_load,
     catenary,
+    collision_groups,
     crane_pid,
     crane_pid_incremental,
     crane_pid_nonlinear,

@@ -65,6 +65,24 @@ fn restitution_out_of_range_is_refused() {
     assert_eq!(s.bodies[0].restitution, 0.7);
 }
 
+/// `collision_groups` lists group numbers 1 to 32 (an extension); a
+/// number outside is refused where it stands, an unknown key by name, and
+/// a list left out means every group.
+#[test]
+fn collision_groups_are_group_numbers_from_1_to_32() {
+    check(
+        &replace("mass = 10", "mass = 10\ncollision_groups = { memberships = [0] }"),
+        11,
+        37,
+        "`collision_groups.memberships` lists group 0; groups are numbered 1 to 32",
+    );
+    check(&replace("gj = 1", "gj = 1\ncollision_groups = { filter = [1, 33] }"), 22, 35, "`collision_groups.filter` lists group 33");
+    check(&replace("gj = 1", "gj = 1\ncollision_groups = { filters = [1] }"), 22, 22, "unknown field `filters`");
+    let s = parse(&replace("mass = 10", "mass = 10\ncollision_groups = { memberships = [1, 32], filter = [2] }"), "ok.toml").unwrap();
+    assert_eq!((s.bodies[0].collision_groups.memberships, s.bodies[0].collision_groups.filter), (1 | 1 << 31, 2));
+    assert_eq!((s.cables[0].collision_groups.memberships, s.cables[0].collision_groups.filter), (u32::MAX, u32::MAX));
+}
+
 #[test]
 fn base_is_valid() {
     let s = parse(BASE, "base.toml").unwrap();

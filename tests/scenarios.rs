@@ -31,6 +31,33 @@ fn every_shipped_scenario_is_valid_and_builds() {
     assert!(n >= 3);
 }
 
+/// `collision_groups.toml`: the hoist rope, whose groups leave out the
+/// boom's, hangs through the boom and holds its ball at rest with
+/// m g + ρ g L = 4 974.06 N at the top; the draped rope (default groups)
+/// lies on the boom, its centreline one radius above the top (5.11 m),
+/// carrying its weight ρ g L = 62.784 N. Without the groups the hoist rope,
+/// laid through the boom, is refused at its first step.
+#[test]
+fn collision_groups_scenario_hoist_through_its_boom() {
+    let (_, rows) = run("assets/scenarios/collision_groups.toml");
+    let last = rows.last().unwrap();
+    let (top, ball_y, contact, middle_y) = (last[1], last[3], last[5], last[7]);
+    let (g, rho) = (9.81, 1.6);
+    let hoist = 500.0 * g + rho * 4.4 * g;
+    println!("top tension {top:.4} N (m g + ρ g L = {hoist:.4}); ball at {ball_y:.6} m; draped contact {contact:.4} N, middle at {middle_y:.6} m");
+    assert!((top / hoist - 1.0).abs() < 1e-6, "top tension {top} N against {hoist} N");
+    assert!((ball_y - 1.3).abs() < 2e-3, "the ball should hang where it was laid, less the stretch: {ball_y} m");
+    assert!((contact / (rho * 4.0 * g) - 1.0).abs() < 1e-6, "draped contact force {contact} N");
+    assert!((middle_y - 5.11).abs() < 1e-5, "the draped rope's middle at {middle_y} m");
+    let src = std::fs::read_to_string("assets/scenarios/collision_groups.toml").unwrap();
+    let plain = src.replace("collision_groups = { memberships = [1], filter = [1] }", "");
+    let sc = scenario::parse(&plain, "no_groups.toml").unwrap_or_else(|e| panic!("{e}"));
+    let mut world = World::new(sc).unwrap_or_else(|e| panic!("{e}"));
+    let refused = (0..10).find_map(|_| world.step().err());
+    println!("without the hoist's groups: {refused:?}");
+    assert!(refused.is_some_and(|e| e.to_string().contains("hoist")), "the hoist laid through the boom should be refused");
+}
+
 /// verification-cases §5b from a scenario file: joint position probe.
 #[test]
 fn trolley_pendulum_scenario_matches_closed_form() {

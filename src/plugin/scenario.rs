@@ -333,6 +333,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
             collider,
             Friction::coefficient(b.friction as f32),
             Restitution::coefficient(b.restitution as f32),
+            groups(b.collision_groups),
             Velocity { linear: b.linear_velocity.as_vec3(), angular: b.angular_velocity.as_vec3() },
             Sleeping::disabled(),
             exact,
@@ -368,6 +369,7 @@ fn spawn_scenario(world: &mut World, scenario: Scenario, (rails, scheme): (Vec<S
         d.tension_only = c.tension_only;
         d.contacts = c.contacts;
         d.friction = c.friction;
+        d.collision_groups = groups(c.collision_groups);
         d.scheme = scheme.clone();
         d.stress_free = c.stress_free;
         d.static_start = sim.statics.then_some(sim.static_load_steps);
@@ -619,4 +621,9 @@ impl ProbeSource for View<'_> {
             None => Probe::Scalar(f64::NAN),
         }
     }
+}
+
+/// A scenario's collision groups as bevy_rapier's component.
+fn groups(g: crate::scenario::CollisionGroups) -> CollisionGroups {
+    CollisionGroups::new(Group::from_bits_retain(g.memberships), Group::from_bits_retain(g.filter))
 }

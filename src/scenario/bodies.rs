@@ -85,6 +85,7 @@ fn body(ctx: &Ctx<'_>, raw: &S<RawBody>, seen: &mut HashMap<String, super::Locat
         angular_velocity: angular * std::f64::consts::PI / 180.0,
         friction: ctx.check_or(&r.friction, o, "friction", Rule::NonNegative, "", 0.5)?,
         restitution: ctx.check_or(&r.restitution, o, "restitution", Rule::Between(0.0, 1.0), "", 0.0)?,
+        collision_groups: ctx.groups(&r.collision_groups, o)?,
         wind_area: ctx.check_or(&r.wind_area, o, "wind_area", Rule::NonNegative, "m²", 0.0)?,
         wind_coefficient: ctx.check_or(&r.wind_coefficient, o, "wind_coefficient", Rule::NonNegative, "", 0.0)?,
         motion,

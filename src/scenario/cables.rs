@@ -82,6 +82,7 @@ fn cable(ctx: &Ctx<'_>, raw: &S<RawCable>, bodies: &[Body], seen: &mut HashMap<S
         end: end_,
         path,
         contacts: r.contacts.as_ref().is_none_or(|c| *c.get_ref()),
+        collision_groups: ctx.groups(&r.collision_groups, o)?,
         loads: loads(ctx, r, o, length)?,
         stress_free: r.stress_free.as_ref().is_some_and(|c| *c.get_ref()),
         tension_only: r.tension_only.as_ref().is_none_or(|c| *c.get_ref()),

@@ -35,8 +35,8 @@ pub use self::error::ScenarioError;
 pub use self::probes::{Component, Probe, ProbeTarget, Quantity};
 pub use self::span::Location;
 pub use self::types::{
-    Body, BodyKind, Cable, CableEnd, CableSide, Drive, Environment, IntegratorChoice, Joint, JointKind, Motion, PointLoad, Scenario, Shape, Simulation,
-    TimeSeries, Winch, INTEGRATOR_NAMES,
+    Body, BodyKind, Cable, CableEnd, CableSide, CollisionGroups, Drive, Environment, IntegratorChoice, Joint, JointKind, Motion, PointLoad, Scenario, Shape,
+    Simulation, TimeSeries, Winch, INTEGRATOR_NAMES,
 };
 pub use self::validate::MAX_STEPS;
 

@@ -140,6 +140,16 @@ pub(crate) struct RawBody {
     pub wind_area: Option<S<f64>>,
     pub wind_coefficient: Option<S<f64>>,
     pub motion: Option<S<RawMotion>>,
+    pub collision_groups: Option<S<RawGroups>>,
+}
+
+/// `collision_groups = { memberships = [..], filter = [..] }` (group
+/// numbers 1 to 32).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawGroups {
+    pub memberships: Option<S<Vec<S<i64>>>>,
+    pub filter: Option<S<Vec<S<i64>>>>,
 }
 
 /// A kinematic body's `motion = { ... }`.
@@ -211,6 +221,7 @@ pub(crate) struct RawCable {
     pub loads: Option<S<Vec<S<RawLoad>>>>,
     pub stress_free: Option<S<bool>>,
     pub tension_only: Option<S<bool>>,
+    pub collision_groups: Option<S<RawGroups>>,
 }
 
 /// One entry of a cable's `loads = [{ s, force, moment }, ...]`.

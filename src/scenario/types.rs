@@ -173,6 +173,8 @@ pub struct Body {
     /// and other rigid bodies, combined as rapier combines two colliders'
     /// (their mean by default); 0 by default, rapier's.
     pub restitution: f64,
+    /// Collision groups of its collider (extension; default every group).
+    pub collision_groups: CollisionGroups,
     /// Exposed area for wind load, m² (default 0).
     pub wind_area: f64,
     /// Wind shape coefficient C (default 0).
@@ -511,6 +513,9 @@ pub struct Cable {
     pub path: Vec<DVec3>,
     /// Contacts with colliders and other cables (default true).
     pub contacts: bool,
+    /// Which colliders and cables its contacts meet (extension; default
+    /// every group).
+    pub collision_groups: CollisionGroups,
     /// Constant point loads, fixed in world direction, for the whole run
     /// (extension; default none).
     pub loads: Vec<PointLoad>,
@@ -599,4 +604,31 @@ pub struct Winch {
     pub max_length: Option<f64>,
     /// Where the `[[winch]]` table starts.
     pub location: Location,
+}
+
+/// Collision groups as rapier's `InteractionGroups` (test mode "and"): bit
+/// `k − 1` of each mask is group `k` of the file (1 to 32). Two colliders
+/// (or a cable and a collider, or two cables) interact when each one's
+/// memberships meet the other's filter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CollisionGroups {
+    /// The groups it belongs to.
+    pub memberships: u32,
+    /// The groups it interacts with.
+    pub filter: u32,
+}
+
+#[cfg(feature = "rapier")]
+impl From<CollisionGroups> for rapier3d::prelude::InteractionGroups {
+    fn from(g: CollisionGroups) -> Self {
+        use rapier3d::prelude::{Group, InteractionTestMode};
+        rapier3d::prelude::InteractionGroups::new(Group::from_bits_retain(g.memberships), Group::from_bits_retain(g.filter), InteractionTestMode::And)
+    }
+}
+
+impl Default for CollisionGroups {
+    /// Every group, both ways (a rapier collider's default).
+    fn default() -> Self {
+        CollisionGroups { memberships: u32::MAX, filter: u32::MAX }
+    }
 }

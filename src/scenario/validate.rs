@@ -8,9 +8,9 @@ use std::path::Path;
 use glam::DVec3;
 
 use super::error::ScenarioError;
-use super::raw::{Datum, RawEnvironment, RawScenario, RawSimulation, Vector, S};
+use super::raw::{Datum, RawEnvironment, RawGroups, RawScenario, RawSimulation, Vector, S};
 use super::span::{LineIndex, Location};
-use super::types::{Environment, IntegratorChoice, Scenario, Simulation, INTEGRATOR_NAMES};
+use super::types::{CollisionGroups, Environment, IntegratorChoice, Scenario, Simulation, INTEGRATOR_NAMES};
 
 /// Result of a validation step.
 pub(crate) type Res<T> = Result<T, ScenarioError>;
@@ -69,6 +69,30 @@ impl<'a> Ctx<'a> {
             Some(v) => self.check(v, owner, field, rule, unit),
             None => Ok(default),
         }
+    }
+
+    /// An optional `collision_groups = { memberships = [..], filter = [..] }`
+    /// (group numbers 1 to 32; a list left out: every group).
+    pub(crate) fn groups(&self, v: &Option<S<RawGroups>>, owner: &str) -> Res<CollisionGroups> {
+        let Some(v) = v else {
+            return Ok(CollisionGroups::default());
+        };
+        let mask = |list: &Option<S<Vec<S<i64>>>>, field: &str| -> Res<u32> {
+            let Some(list) = list else {
+                return Ok(u32::MAX);
+            };
+            let mut mask = 0u32;
+            for g in list.get_ref() {
+                let k = *g.get_ref();
+                if !(1..=32).contains(&k) {
+                    return Err(self.err(g.span(), format!("{owner}: `collision_groups.{field}` lists group {k}; groups are numbered 1 to 32")));
+                }
+                mask |= 1 << (k - 1);
+            }
+            Ok(mask)
+        };
+        let r = v.get_ref();
+        Ok(CollisionGroups { memberships: mask(&r.memberships, "memberships")?, filter: mask(&r.filter, "filter")? })
     }
 
     /// A 3-vector of finite numbers.

@@ -313,7 +313,7 @@ impl RapierWorld {
             .can_sleep(false)
             .gyroscopic_forces_enabled(true);
         let mass = b.mass.unwrap_or(0.0);
-        let mut co = collider(&b.shape).friction(b.friction as f32).restitution(b.restitution as f32);
+        let mut co = collider(&b.shape).friction(b.friction as f32).restitution(b.restitution as f32).collision_groups(b.collision_groups.into());
         if b.kind == BodyKind::Dynamic {
             co = co.mass(mass as f32);
         }

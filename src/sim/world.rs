@@ -391,7 +391,10 @@ fn cable_spec(sc: &Scenario, c: &scenario::Cable, scheme: &Scheme, rapier: &Rapi
         scheme: scheme.clone(),
         exact: [exact(&c.start), exact(&c.end)],
         contact: if c.contacts {
-            CableContact::steel(c.diameter, c.linear_density * c.length / c.segments.max(1) as f64).and_then(|k| k.with_friction(c.friction)).ok()
+            CableContact::steel(c.diameter, c.linear_density * c.length / c.segments.max(1) as f64)
+                .and_then(|k| k.with_friction(c.friction))
+                .map(|k| k.with_groups(c.collision_groups.into()))
+                .ok()
         } else {
             None
         },
