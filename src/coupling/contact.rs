@@ -1715,8 +1715,8 @@ fn body_touch_points<'c>(rb: &rp::RigidBody, colliders: &'c rp::ColliderSet) -> 
 /// positive and at most `limit` (m): `depth(surface, point, radius,
 /// collider)` gives a world touch point's depth into a surface and the
 /// surface's outward world normal there (`None`: no touch, or the two
-/// colliders' groups keep them apart). The surfaces are searched in order, each over every point; the
-/// first of equal depths wins.
+/// colliders' groups keep them apart). The surfaces are searched in
+/// order, each over every point; the first of equal depths wins.
 fn moved_out<S>(
     (origin, rotation): (DVec3, DMat3),
     points: &[(DVec3, f64, &rp::Collider)],
