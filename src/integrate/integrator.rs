@@ -223,7 +223,9 @@ pub struct Integrator {
 /// the step's energy may grow, over its checked sub-steps together, by the
 /// supports' work (trapezoidal rule on their power per sub-step) and at
 /// most this fraction more of the kinetic + elastic energy at the first of
-/// them (plus 1e-9 of the energy's size: round-off and the Newton
+/// them, or of the gravitational energy the first of them exchanged if
+/// that is more (a step from rest, whose kinetic + elastic energy is
+/// nearly zero), plus 1e-9 of the energy's size (round-off and the Newton
 /// tolerance). A sub-step past that is refused and the step split further,
 /// up to [`NewtonSettings::max_substeps`](super::NewtonSettings::max_substeps);
 /// at the finest split the sub-step is taken as solved (one whose Newton
@@ -564,9 +566,12 @@ impl Integrator {
         let mut known: Option<EnergyBalance> = None;
         // The attempt's net gain so far over its checked sub-steps, and its
         // budget (ENERGY_ACTIVE of the first checked sub-step's kinetic +
-        // elastic energy), J: a share of the energy in motion and in the
-        // springs, not of the total (whose gravitational part depends on
-        // the origin).
+        // elastic energy, or of the gravitational energy that sub-step
+        // exchanged if more), J: a share of the energy in motion, in the
+        // springs or changing form, not of the total (whose gravitational
+        // part depends on the origin). From rest the first share is nearly
+        // zero: the hoist swing's release was refused three times and
+        // split into 8 sub-steps for any gain at all.
         let (mut net, mut budget) = (0.0, None::<f64>);
         for k in 0..n {
             state.t = t + h * f64::from(k) / f64::from(n);
@@ -613,7 +618,7 @@ impl Integrator {
                 self.end_evaluated = false;
                 if let Some(e1) = sys.energy_balance(state.t, &state.q, &state.v, &state.a) {
                     net += e0.gain_to(&e1, hs);
-                    let budget = *budget.get_or_insert(active_share(&e0));
+                    let budget = *budget.get_or_insert_with(|| active_share(&e0).max(ENERGY_ACTIVE * (e1.parts[1] - e0.parts[1]).abs()));
                     if net > budget + round_off(&e0) {
                         stats.energy_refusals += 1;
                         return Err(Failure::EnergyGain);
