@@ -136,8 +136,8 @@ pub struct Chain {
     limb_acc: Vec<V6>,
     /// Per sub-joint (only when there are limbs): `true` where a limb starts.
     limb_start: Vec<bool>,
-    /// Per sub-joint, what the kinematics pass needs to know of its
-    /// constant geometry ([`joint_code`]): built with the layout.
+    /// Per sub-joint, what a pass needs to know of its constant geometry
+    /// ([`SubJoint::code`]): built with the layout.
     joint_code: Vec<u8>,
     /// Per sub-joint: index of the rotation spring whose block starts here,
     /// [`BLOCK_INNER`] inside a block, `u32::MAX` for a single sub-joint.
@@ -317,7 +317,7 @@ impl Chain {
         self.slot_key.springs.extend(self.rotation_springs.iter().map(|r| r.first));
         self.slot_key.limbs.clone_from(&self.limbs);
         self.joint_code.clear();
-        self.joint_code.extend(self.joints.iter().map(joint_code));
+        self.joint_code.extend(self.joints.iter().map(SubJoint::code));
         self.limb_parent.clear();
         self.limb_start.clear();
         let mut parents = 0u32;
@@ -485,7 +485,7 @@ impl Chain {
     pub(crate) fn set_pre_rotation_same_layout(&mut self, s: usize, rotation: DMat3) {
         if let Some(j) = self.joints.get_mut(s) {
             j.pre_rotation = rotation;
-            let code = joint_code(j);
+            let code = j.code();
             if let Some(c) = self.joint_code.get_mut(s) {
                 *c = code;
             }
@@ -1014,24 +1014,3 @@ impl Chain {
         out
     }
 }
-
-/// What the kinematics pass needs to know of a sub-joint's constant
-/// geometry, in one byte: its axis class ([`sweep::axis_id`], bits 0–1),
-/// whether it has a pre-rotation (bit 2, [`JOINT_TURNED`]) and an offset
-/// (bit 3, [`JOINT_OFFSET`]). Tested once per layout instead of nine and
-/// three float compares per sub-joint and pass.
-fn joint_code(j: &SubJoint) -> u8 {
-    let mut code = sweep::axis_id(j.axis);
-    if j.pre_rotation != DMat3::IDENTITY {
-        code |= JOINT_TURNED;
-    }
-    if j.offset != DVec3::ZERO {
-        code |= JOINT_OFFSET;
-    }
-    code
-}
-
-/// [`joint_code`]'s bit for a sub-joint with a pre-rotation.
-const JOINT_TURNED: u8 = 4;
-/// [`joint_code`]'s bit for a sub-joint with an offset.
-const JOINT_OFFSET: u8 = 8;

@@ -282,7 +282,8 @@ impl Chain {
             tw += self.rows[s].s * dq;
             let pose = &self.poses[s];
             let w = tw.top;
-            let (rj, pj) = j.frame(prev_rot, prev_pos);
+            // (The layout's codes are those of the kinematics pass at `q`.)
+            let (rj, pj) = j.frame(self.joint_code[s], prev_rot, prev_pos);
             let aw = rj * j.axis;
             match j.kind {
                 JointKind::Revolute => {

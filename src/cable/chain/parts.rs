@@ -208,13 +208,31 @@ impl SubJoint {
         self.taut_measure(q, v) - self.stop
     }
 
+    /// What a pass needs to know of the joint's constant geometry, in one
+    /// byte: its axis class ([`axis_id`](super::sweep::axis_id), bits 0–1),
+    /// whether it has a pre-rotation (bit 2, [`JOINT_TURNED`]) and an
+    /// offset (bit 3, [`JOINT_OFFSET`]). The chain keeps it per sub-joint
+    /// with its layout, so that a pass tests one byte instead of nine and
+    /// three float compares.
+    pub(crate) fn code(&self) -> u8 {
+        let mut code = super::sweep::axis_id(self.axis);
+        if self.pre_rotation != DMat3::IDENTITY {
+            code |= JOINT_TURNED;
+        }
+        if self.offset != DVec3::ZERO {
+            code |= JOINT_OFFSET;
+        }
+        code
+    }
+
     /// The joint frame (orientation, origin) in the frame of the parent
     /// link at `(prev_rot, prev_pos)`: the constant pre-rotation and
-    /// offset applied, before the joint's own motion.
+    /// offset applied, before the joint's own motion; `code` is the
+    /// joint's [`SubJoint::code`].
     #[inline]
-    pub(crate) fn frame(&self, prev_rot: DMat3, prev_pos: DVec3) -> (DMat3, DVec3) {
-        let rj = if self.pre_rotation == DMat3::IDENTITY { prev_rot } else { prev_rot * self.pre_rotation };
-        let pj = if self.offset == DVec3::ZERO { prev_pos } else { prev_pos + prev_rot * self.offset };
+    pub(crate) fn frame(&self, code: u8, prev_rot: DMat3, prev_pos: DVec3) -> (DMat3, DVec3) {
+        let rj = if code & JOINT_TURNED != 0 { prev_rot * self.pre_rotation } else { prev_rot };
+        let pj = if code & JOINT_OFFSET != 0 { prev_pos + prev_rot * self.offset } else { prev_pos };
         (rj, pj)
     }
 
@@ -428,3 +446,8 @@ pub struct Limb {
     /// Link the limb hangs from (`None`: the base).
     pub parent: Option<usize>,
 }
+
+/// [`SubJoint::code`]'s bit for a sub-joint with a pre-rotation.
+pub(crate) const JOINT_TURNED: u8 = 4;
+/// [`SubJoint::code`]'s bit for a sub-joint with an offset.
+pub(crate) const JOINT_OFFSET: u8 = 8;

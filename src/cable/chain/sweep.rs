@@ -153,10 +153,8 @@ impl Chain {
                     }
                 }
             }
-            // `SubJoint::frame` with its tests read from the layout's code.
             let code = self.joint_code[s];
-            let rj = if code & JOINT_TURNED != 0 { prev_rot * j.pre_rotation } else { prev_rot };
-            let pj = if code & JOINT_OFFSET != 0 { prev_pos + prev_rot * j.offset } else { prev_pos };
+            let (rj, pj) = j.frame(code, prev_rot, prev_pos);
             // Principal axes (every rope sub-joint) are column picks.
             let axis_id = code & 3;
             let aw = match axis_id {
