@@ -14,15 +14,7 @@ use bevy_rapier_cable::plugin::*;
 const G: f32 = 9.81;
 const H: f32 = 1.0 / 60.0;
 
-/// A free 3 m steel rope (20 mm, 30 elements) laid level along x with its
-/// centreline at height `y` (m) and at `z` (m).
-fn free_rope(y: f32, z: f32) -> CableDescriptor {
-    CableDescriptor::new(3.0)
-        .material(RopeMaterial::steel_6x36_iwrc(0.02))
-        .segments(30)
-        .start(CableAnchor::Free)
-        .path([Vec3::new(-1.5, y, z), Vec3::new(1.5, y, z)])
-}
+use plugin_app::free_rope_laid_level as free_rope;
 
 fn lowest(app: &App, rope: Entity) -> f32 {
     app.world().get::<CableState>(rope).unwrap().nodes.iter().map(|p| p.y).fold(f32::INFINITY, f32::min)

@@ -358,15 +358,7 @@ fn a_rope_laid_into_a_collider_is_refused_at_its_first_step() {
     assert!(top < 0.0101, "a rope laid on the ground should stay on it: highest node {top} m");
 }
 
-/// A free 3 m steel rope (20 mm, 30 elements) laid level along x at
-/// height `y` (m, its centre), from x = −1.5 to 1.5 m at `z` m.
-fn free_rope_laid_level(y: f32, z: f32) -> CableDescriptor {
-    CableDescriptor::new(3.0)
-        .material(RopeMaterial::steel_6x36_iwrc(0.02))
-        .segments(30)
-        .start(CableAnchor::Free)
-        .path([Vec3::new(-1.5, y, z), Vec3::new(1.5, y, z)])
-}
+use plugin_app::free_rope_laid_level;
 
 /// Runs `frames` frames and returns the cable errors they reported.
 fn run_frames(app: &mut App, frames: usize) -> Vec<CableError> {

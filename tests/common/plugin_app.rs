@@ -4,7 +4,8 @@
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use bevy_rapier3d::prelude::*;
-use bevy_rapier_cable::plugin::{CableError, CablePlugin};
+use bevy_rapier_cable::cable::RopeMaterial;
+use bevy_rapier_cable::plugin::{CableAnchor, CableDescriptor, CableError, CablePlugin};
 
 #[allow(dead_code)] // a binary may build its own app
 pub fn headless_app(dt: f32) -> App {
@@ -34,4 +35,15 @@ pub fn errors_over(app: &mut App, frames: usize) -> Vec<CableError> {
         errors.extend(app.world().resource::<Messages<CableError>>().iter_current_update_messages().cloned());
     }
     errors
+}
+
+/// A free 3 m steel rope (20 mm, 30 elements) laid level along x at
+/// height `y` (m, its centre), from x = −1.5 to 1.5 m at `z` m.
+#[allow(dead_code)] // not every test binary lays one
+pub fn free_rope_laid_level(y: f32, z: f32) -> CableDescriptor {
+    CableDescriptor::new(3.0)
+        .material(RopeMaterial::steel_6x36_iwrc(0.02))
+        .segments(30)
+        .start(CableAnchor::Free)
+        .path([Vec3::new(-1.5, y, z), Vec3::new(1.5, y, z)])
 }
